@@ -1,0 +1,75 @@
+// The `crumple` command: parses options (CLI11) and dispatches to the run command.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <map>
+
+#include "run_command.h"
+#include "sim/backends.h"
+
+using namespace crumple;
+
+namespace {
+template <class E>
+CLI::Transformer choice(const std::map<std::string, E>& names) {
+  return CLI::Transformer(names, CLI::ignore_case);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"crumple: real-time paper crumpling on an adaptive mass-spring mesh"};
+  cli.require_subcommand(1);
+  app::RunOptions o;
+  Params& p = o.params;
+  CLI::App* run = cli.add_subcommand("run", "Simulate a sheet; optionally write stats.csv and OBJ frames");
+
+  auto* grid = run->add_option("--grid", o.grid, "N x N vertex grid on the unit square")->capture_default_str();
+  run->add_option("--mesh", o.mesh, "triangle mesh to crumple (OBJ)")->excludes(grid);
+  run->add_flag("--fixed-diagonals", o.fixed_diagonals, "grid: one diagonal direction everywhere");
+  run->add_option("--scene", p.scene, "sphere | free")
+      ->transform(choice<Scene>({{"sphere", Scene::Sphere}, {"free", Scene::Free}}));
+  run->add_option("--squeeze", p.squeeze, "free scene: initial scale about the centroid")->capture_default_str();
+  run->add_option("--frames", o.frames, "frames of 1/60 s")->capture_default_str();
+  run->add_option("--substeps", p.substeps, "steps per frame")->capture_default_str();
+  run->add_option("--integrator", p.integrator, "approx | explicit | implicit")
+      ->transform(choice<Integrator>({{"approx", Integrator::Approx},
+                                      {"explicit", Integrator::Explicit},
+                                      {"implicit", Integrator::Implicit}}));
+  run->add_option("--sweeps", p.sweeps, "K, Jacobi sweeps of the approximate implicit method")->capture_default_str();
+  run->add_option("--predictor", p.predictor, "approx: bounded | explicit (the paper's, unstable when stiff)")
+      ->transform(choice<Predictor>({{"bounded", Predictor::Bounded}, {"explicit", Predictor::Explicit}}));
+  run->add_option("--cg-tolerance", p.cg_tolerance, "implicit: CG relative tolerance")->capture_default_str();
+  run->add_option("--backend", o.backend, "backend")->check(CLI::IsMember(backend_names()))->capture_default_str();
+  run->add_option("--threads", o.threads, "worker threads")->capture_default_str();
+  run->add_option("--seed", p.seed, "seed of the random stream")->capture_default_str();
+  run->add_option("--kappa", p.kappa, "stiffness per unit mass [Eq 5]")->capture_default_str();
+  run->add_option("--bend", p.bend, "bending coefficient per unit mass [Eq 9]")->capture_default_str();
+  run->add_option("--damping", p.damping, "spring damping per unit mass")->capture_default_str();
+  run->add_option("--phi", p.phi, "curvature sensitivity of fracture [Eq 6]")->capture_default_str();
+  run->add_option("--psi", p.psi, "new-vertex offset scale [Eq 7]")->capture_default_str();
+  run->add_option("--epsilon", p.epsilon, "restoration threshold [Eq 10]")->capture_default_str();
+  run->add_option("--varphi", p.varphi, "mass-split exponent [Eq 3]")->capture_default_str();
+  run->add_option("--floor", p.floor, "refinement floor, fraction of the mean edge length")->capture_default_str();
+  run->add_option("--gravity", p.gravity, "gravity along -z, m/s^2")->capture_default_str();
+  run->add_option("--mass", p.total_mass, "total sheet mass")->capture_default_str();
+  run->add_option("--restore", p.restore, "exact | paper")
+      ->transform(choice<RestoreForm>({{"exact", RestoreForm::Exact}, {"paper", RestoreForm::Paper}}));
+  run->add_option("--bending", p.bending, "balanced | paper")
+      ->transform(choice<BendingForm>({{"balanced", BendingForm::Balanced}, {"paper", BendingForm::Paper}}));
+  run->add_flag("!--no-fracture", p.fracture, "turn the stochastic fracture off");
+  run->add_flag("!--no-restoration", p.restoration, "turn restoration off");
+  run->add_option("--sphere-start", p.sphere_start, "R0 / distance of the farthest vertex")->capture_default_str();
+  run->add_option("--sphere-end", p.sphere_end, "R1 / distance of the farthest vertex")->capture_default_str();
+  run->add_option("--sphere-time", p.sphere_time, "seconds to shrink from R0 to R1")->capture_default_str();
+  run->add_option("--out", o.out, "output folder: stats.csv, final.obj");
+  run->add_option("--every", o.every, "also write every K-th frame as frame_NNNNN.obj")->capture_default_str();
+  run->add_flag("--quiet", o.quiet, "no progress bar and no summary");
+
+  try {
+    cli.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return cli.exit(e);  // --help
+    std::fprintf(stderr, "crumple: error: %s\n", e.what());
+    return app::kBadInput;
+  }
+  return app::run(o);
+}

@@ -1,0 +1,67 @@
+// The model's parameters (MODEL.md §9) and the run's set-up, shared by every backend.
+// Defaults give a plausible crumple of a 32 x 32 sheet in the sphere scene; README.md lists them.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace crumple {
+
+enum class Scene { Sphere, Free };                  ///< MODEL.md §8
+enum class Integrator { Approx, Explicit, Implicit };  ///< MODEL.md §3
+enum class RestoreForm { Exact, Paper };            ///< MODEL.md §7
+enum class BendingForm { Balanced, Paper };         ///< MODEL.md §6
+/// Where the approximate implicit method's Jacobi sweeps start (docs/DECISIONS.md, D1).
+enum class Predictor { Bounded, Explicit };
+
+struct Params {
+  // --- scene (MODEL.md §8) ---
+  Scene scene = Scene::Sphere;  ///< sphere crumple or free relax
+  double squeeze = 0.7;         ///< free scene: initial positions scaled by this about the centroid
+  double sphere_start = 1.0;    ///< R0 as a fraction of the farthest vertex's distance from the centroid
+  double sphere_end = 0.3;      ///< R1, same unit as sphere_start
+  double sphere_time = 2.0;     ///< seconds for the sphere to shrink from R0 to R1 (then it holds)
+  double gravity = 0.0;         ///< m/s^2 along -z
+  double total_mass = 1.0;      ///< sheet mass, spread by vertex area
+
+  // --- time integration (MODEL.md §3) ---
+  double frame_dt = 1.0 / 60.0;          ///< one frame of simulated time
+  int substeps = 1;                      ///< steps per frame: h = frame_dt / substeps
+  Integrator integrator = Integrator::Approx;
+  int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
+  Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit
+  double cg_tolerance = 1e-6;            ///< Baraff-Witkin: relative CG residual
+  int cg_max_iterations = 1000;          ///< Baraff-Witkin: CG iteration cap
+
+  // --- forces (MODEL.md §2, §6) ---
+  double kappa = 1.0e4;     ///< stiffness per unit mass: kappa_e = kappa (m_i + m_j)   [Eq 5]
+  double bend = 30.0;       ///< C_beta per unit mass: C_beta,e = bend (m_i + m_j)      [Eq 9]
+  double damping = 0.0;     ///< k_d per unit mass, spring-axis damping (optional)
+  BendingForm bending = BendingForm::Balanced;
+
+  // --- adaptive mesh (MODEL.md §4, §5, §7) ---
+  bool fracture = true;         ///< stochastic fracture on/off
+  bool restoration = true;      ///< restoration on/off
+  double phi = 0.5;             ///< curvature sensitivity of fracture            [Eq 6]
+  double psi = 0.5;             ///< new-vertex offset scale                       [Eq 7]
+  double epsilon = 0.5;         ///< restoration threshold                         [Eq 10]
+  double varphi = 2.0;          ///< mass-split exponent (>= 1)                    [Eq 3]
+  double floor = 0.25;          ///< refinement floor: edges with rest length below floor x the
+                                ///< initial mean edge length never break
+  RestoreForm restore = RestoreForm::Exact;
+  std::uint64_t seed = 1;       ///< seed of the counter-based random stream
+
+  /// Time step h.
+  double h() const { return frame_dt / substeps; }
+
+  /// Empty if every value is usable; otherwise one line naming the first bad parameter.
+  std::string validate() const;
+};
+
+const char* to_string(Scene);
+const char* to_string(Integrator);
+const char* to_string(RestoreForm);
+const char* to_string(BendingForm);
+const char* to_string(Predictor);
+
+}  // namespace crumple

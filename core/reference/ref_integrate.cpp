@@ -1,0 +1,144 @@
+// Time integration of the reference backend (MODEL.md §3) and the sphere constraint (§8).
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCore>
+
+#include "reference/reference_sim.h"
+
+namespace crumple::ref {
+
+// Approximate implicit integration (Kang & Cho; MODEL.md §3, docs/DECISIONS.md D1). Row i of
+// the implicit system with the isotropic spring Jacobian (df_i/dx_j = kappa_e I) reads
+//     v_i' = (m_i v_i + h f_i + h^2 sum_e kappa_e v_j') / (m_i + h^2 sum_e kappa_e);
+// each sweep evaluates it with v_j' on the right taken from the previous sweep. The first guess:
+//  * Explicit (the paper's): v_j + h f_j / m_j. Unstable once h^2 kappa_e / m exceeds about 1.
+//  * Bounded (default): v_j + h g + (h f_j^int + h^2 sum_e kappa_e (v_k - v_j)) / (m_j + 2 h^2
+//    sum_e kappa_e): the same row solved with its diagonal bounded by Gershgorin (neighbours
+//    moving against it), external acceleration g exact. Equal to the explicit guess for soft
+//    springs; stable for any h and any K. K -> infinity converges to the linear implicit step.
+void ReferenceSimulator::integrate_approx(double h) {
+  const std::vector<V3> f = total_forces();
+  const size_t n = mesh_.verts.size();
+  const double h2 = h * h;
+  const V3 g(0, 0, -params_.gravity);
+  std::vector<double> ksum(n, 0.0);
+  std::vector<V3> jv(n, V3::Zero());  // sum_e kappa_e (v_j - v_i)
+  for (const Edge& E : mesh_.edges) {
+    if (!E.alive) continue;
+    const V3 dv = mesh_.verts[E.b].v - mesh_.verts[E.a].v;
+    ksum[E.a] += E.kappa;
+    ksum[E.b] += E.kappa;
+    jv[E.a] += E.kappa * dv;
+    jv[E.b] -= E.kappa * dv;
+  }
+  std::vector<V3> guess(n, V3::Zero()), next(n, V3::Zero());
+  for (size_t k = 0; k < n; ++k) {
+    const Vertex& V = mesh_.verts[k];
+    if (!V.alive) continue;
+    if (params_.predictor == Predictor::Explicit)
+      guess[k] = V.v + h * f[k] / V.m;
+    else
+      guess[k] = V.v + h * g + (h * (f[k] - V.m * g) + h2 * jv[k]) / (V.m + 2 * h2 * ksum[k]);
+  }
+  for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
+    std::vector<V3> num(n, V3::Zero());
+    for (size_t k = 0; k < n; ++k)
+      if (mesh_.verts[k].alive) num[k] = mesh_.verts[k].m * mesh_.verts[k].v + h * f[k];
+    for (const Edge& E : mesh_.edges) {
+      if (!E.alive) continue;
+      num[E.a] += h2 * E.kappa * guess[E.b];
+      num[E.b] += h2 * E.kappa * guess[E.a];
+    }
+    for (size_t k = 0; k < n; ++k)
+      if (mesh_.verts[k].alive) next[k] = num[k] / (mesh_.verts[k].m + h2 * ksum[k]);
+    guess.swap(next);
+  }
+  // A finite number of sweeps leaves an error with a net momentum, which the exact implicit
+  // step would not have (its matrix has zero row sums off the mass): remove it with a uniform
+  // velocity so that sum m v' = sum m v + h sum f exactly (docs/DECISIONS.md D2).
+  V3 drift = V3::Zero();
+  double mass = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const Vertex& V = mesh_.verts[k];
+    if (!V.alive) continue;
+    drift += V.m * (guess[k] - V.v) - h * f[k];
+    mass += V.m;
+  }
+  const V3 correction = drift / mass;
+  for (size_t k = 0; k < n; ++k) {
+    Vertex& V = mesh_.verts[k];
+    if (!V.alive) continue;
+    V.v = guess[k] - correction;
+    V.x += h * V.v;
+  }
+}
+
+// Symplectic Euler: v' = v + h f / m, x' = x + h v'.
+void ReferenceSimulator::integrate_explicit(double h) {
+  const std::vector<V3> f = total_forces();
+  for (size_t k = 0; k < mesh_.verts.size(); ++k) {
+    Vertex& V = mesh_.verts[k];
+    if (!V.alive) continue;
+    V.v += h * f[k] / V.m;
+    V.x += h * V.v;
+  }
+}
+
+// Baraff-Witkin implicit Euler, (M - h^2 df/dx - h df/dv) dv = h (f + h df/dx v), with the true
+// spring Jacobian -kappa_e [u u^T + (1 - l0/lt)(I - u u^T)] (the second term dropped when
+// compressed so the matrix stays definite); bending is explicit. Solved by Eigen's CG.
+void ReferenceSimulator::integrate_implicit(double h) {
+  const std::vector<V3> f = total_forces();
+  const int nv = int(mesh_.verts.size());
+  std::vector<int> row(nv, -1);
+  int n = 0;
+  for (int k = 0; k < nv; ++k)
+    if (mesh_.verts[k].alive) row[k] = n++;
+
+  using Mat3 = Eigen::Matrix3d;
+  std::vector<Eigen::Triplet<double>> trip;
+  Eigen::VectorXd b(3 * n);
+  for (int k = 0; k < nv; ++k) {
+    if (row[k] < 0) continue;
+    for (int d = 0; d < 3; ++d) trip.emplace_back(3 * row[k] + d, 3 * row[k] + d, mesh_.verts[k].m);
+    b.segment<3>(3 * row[k]) = h * f[k];
+  }
+  auto add_block = [&](int i, int j, const Mat3& m) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) trip.emplace_back(3 * row[i] + r, 3 * row[j] + c, m(r, c));
+  };
+  for (const Edge& E : mesh_.edges) {
+    if (!E.alive) continue;
+    const Vertex &A = mesh_.verts[E.a], &B = mesh_.verts[E.b];
+    const V3 d = A.x - B.x;
+    const double lt = d.norm();
+    if (!(lt > 0)) continue;
+    const V3 u = d / lt;
+    const Mat3 uu = u * u.transpose();
+    Mat3 K = -E.kappa * uu;  // df_a/dx_a
+    if (lt > E.l0) K -= E.kappa * (1.0 - E.l0 / lt) * (Mat3::Identity() - uu);
+    const Mat3 D = -params_.damping * (A.m + B.m) * uu;  // df_a/dv_a
+    const Mat3 Aaa = -h * h * K - h * D;
+    add_block(E.a, E.a, Aaa);
+    add_block(E.b, E.b, Aaa);
+    add_block(E.a, E.b, -Aaa);
+    add_block(E.b, E.a, -Aaa);
+    const V3 jv = K * (A.v - B.v);  // (df/dx v)_a
+    b.segment<3>(3 * row[E.a]) += h * h * jv;
+    b.segment<3>(3 * row[E.b]) -= h * h * jv;
+  }
+  Eigen::SparseMatrix<double> M(3 * n, 3 * n);
+  M.setFromTriplets(trip.begin(), trip.end());
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
+  cg.setTolerance(params_.cg_tolerance);
+  cg.setMaxIterations(params_.cg_max_iterations);
+  cg.compute(M);
+  const Eigen::VectorXd dv = cg.solve(b);
+  for (int k = 0; k < nv; ++k) {
+    if (row[k] < 0) continue;
+    Vertex& V = mesh_.verts[k];
+    V.v += dv.segment<3>(3 * row[k]);
+    V.x += h * V.v;
+  }
+}
+
+}  // namespace crumple::ref

@@ -1,0 +1,36 @@
+// Running a simulation frame by frame: statistics per frame and the instability check, the same
+// for every backend (used by the command, the tests and the benchmarks).
+#pragma once
+
+#include <string>
+
+#include "sim/scene.h"
+#include "sim/simulator.h"
+
+namespace crumple {
+
+/// One row of stats.csv.
+struct FrameStats {
+  int frame = 0;          ///< 1-based frame number
+  double time = 0;        ///< simulated seconds at the end of the frame
+  Totals totals;          ///< state at the end of the frame
+  int splits = 0;         ///< splits during the frame
+  int restores = 0;       ///< restores during the frame
+  double step_ms = 0;     ///< wall time of the frame
+};
+
+/// The stats.csv header (exactly as documented in README.md).
+const char* stats_header();
+/// One CSV line for s (no newline).
+std::string stats_row(const FrameStats& s);
+
+/// Advances one frame (params.substeps steps) and returns its statistics.
+FrameStats run_frame(Simulator& sim, int substeps, int frame);
+
+/// Empty if the state is sane; otherwise why it is not: a non-finite value, or a vertex that has
+/// gone past 100 sheet sizes from the centre or faster than 1e4 sheet sizes per second, or a
+/// spring stretched past 11 times its rest length (energy growing without bound; inside the
+/// sphere positions stay bounded, so strain is what shows it there).
+std::string instability(const Totals& t, double sheet_size);
+
+}  // namespace crumple

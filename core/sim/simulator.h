@@ -1,0 +1,104 @@
+// The backend interface. Every backend (the scalar reference, the fast SoA core) implements the
+// same model of ../shared/paper/MODEL.md behind this class, so the command, the tests and the
+// benchmarks iterate one registry of backends (see backends.h) and run the same cases on each.
+//
+// A backend owns the mesh topology (vertices, edges, triangles, split records) and the
+// per-step state (positions, velocities, masses). Element ids follow one policy in every backend
+// so that the random stream, keyed by edge id, gives the same decisions everywhere:
+//   * the input mesh's vertices keep their ids; its edges are numbered in order of first
+//     appearance walking triangles t = 0, 1, ... and their edges (v0,v1), (v1,v2), (v2,v0);
+//   * a removed vertex, edge or triangle id goes on a free list of its kind (last in, first
+//     out); a new element takes the free list's last id, else the next new id;
+//   * a split allocates, in order: vertex n; edges e_in, e_nj, e_ln, e_nr (those that exist);
+//     triangle (n,j,l) then (n,i,r); triangles (i,j,l) and (j,i,r) keep their ids as (i,n,l)
+//     and (j,n,r). A restore frees, in order: edges e_in, e_nj, e_ln, e_nr, triangles (n,j,l),
+//     (n,i,r), vertex n.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mesh/input_mesh.h"
+#include "model/params.h"
+
+namespace crumple {
+
+using Vec3d = std::array<double, 3>;
+
+/// Totals over the current state (one row of stats.csv, less the frame bookkeeping).
+struct Totals {
+  int vertices = 0;          ///< live vertices
+  int edges = 0;             ///< live mesh edges (in triangles; auxiliary springs not counted)
+  int auxiliary = 0;         ///< live auxiliary springs (broken edges holding a crease)
+  int triangles = 0;         ///< live triangles
+  double mass = 0;           ///< sum of m_k
+  Vec3d momentum{};          ///< sum of m_k v_k
+  double kinetic = 0;        ///< sum of m_k |v_k|^2 / 2
+  double max_strain = 0;     ///< max over mesh edges of |lt/l0 - 1|
+  double max_distance = 0;   ///< max over vertices of |x_k - c| (c: the scene's centre)
+  double max_speed = 0;      ///< max over vertices of |v_k|
+};
+
+/// Topology events of one step.
+struct StepEvents {
+  int splits = 0;    ///< edges broken and split                 [Eq 6, Eq 2-4, 7]
+  int restores = 0;  ///< auxiliary edges restored               [Eq 10-12]
+};
+
+/// One spring as a test sees it.
+struct EdgeView {
+  int a = -1, b = -1;          ///< endpoint vertex ids
+  int wing_l = -1, wing_r = -1;  ///< third vertex of the triangle traversing a->b, b->a (-1 none)
+  double rest = 0;             ///< current rest length l0
+  bool auxiliary = false;      ///< a broken edge kept as a spring
+  bool breakable = false;      ///< may break [Eq 6] (mesh edges) ; [Eq 10] uses it
+};
+
+/// A copy of the whole state, ids as the backend has them (dead slots marked), for tests/output.
+struct Snapshot {
+  std::vector<Vec3d> rest, position, velocity;  ///< per vertex id (dead: zeros)
+  std::vector<double> mass;                     ///< per vertex id (dead: 0)
+  std::vector<bool> vertex_alive;               ///< per vertex id
+  std::vector<EdgeView> edges;                  ///< per edge id (dead: a = -1)
+  std::vector<std::array<int, 3>> triangles;    ///< per triangle id (dead: {-1,-1,-1})
+};
+
+class Simulator {
+ public:
+  virtual ~Simulator() = default;
+
+  /// The backend's registry name ("reference", "fast").
+  virtual const char* name() const = 0;
+
+  /// Advances one time step h = params.h(): forces, integration, sphere, fracture, restoration.
+  virtual StepEvents step() = 0;
+
+  /// Simulated time and number of steps taken.
+  virtual double time() const = 0;
+  virtual std::uint64_t steps() const = 0;
+
+  virtual Totals totals() const = 0;
+  virtual Snapshot snapshot() const = 0;
+
+  /// Empty when the topology is a valid oriented manifold with consistent helper structures;
+  /// otherwise a description of the first inconsistency.
+  virtual std::string check_topology() const = 0;
+
+  // --- hooks for tests: each runs one part of the model on the current state ---
+  /// Vertex normals (area-weighted, normalized), per vertex id.
+  virtual std::vector<Vec3d> normals() const = 0;
+  /// Total force on each vertex (springs, bending, gravity, damping), per vertex id.
+  virtual std::vector<Vec3d> forces() const = 0;
+  /// Splits edge e now (as if it broke), if it is a live breakable mesh edge. Returns success.
+  virtual bool split(int e) = 0;
+  /// Restores auxiliary edge e now, if the mesh allows it (MODEL.md §7), ignoring the angle test.
+  virtual bool restore(int e) = 0;
+  /// Overwrites positions and velocities (per vertex id; dead ids ignored).
+  virtual void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) = 0;
+  /// Overwrites masses (per vertex id) and updates every kappa_e [Eq 5].
+  virtual void set_masses(const std::vector<double>& m) = 0;
+};
+
+}  // namespace crumple

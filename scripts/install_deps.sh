@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs the Debian packages crumple needs, only those missing. Needs root (apt-get).
+set -euo pipefail
+pkgs=(build-essential cmake g++ libeigen3-dev libtbb-dev libbenchmark-dev libbenchmark-tools
+      libgtest-dev libtinyobjloader-dev libcli11-dev nlohmann-json3-dev libbullet-dev
+      python3-matplotlib python3-scipy python3-numpy)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "install_deps: installing ${missing[*]}"
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  $SUDO apt-get update -q
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+fi
