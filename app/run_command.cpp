@@ -23,21 +23,6 @@ int fail(int code, const std::string& message) {
   return code;
 }
 
-// The live vertices (renumbered densely) and triangles of a snapshot.
-void write_snapshot_obj(const std::string& path, const Snapshot& s) {
-  std::vector<int> id(s.position.size(), -1);
-  std::vector<std::array<double, 3>> xs;
-  for (size_t k = 0; k < s.position.size(); ++k)
-    if (s.vertex_alive[k]) {
-      id[k] = int(xs.size());
-      xs.push_back(s.position[k]);
-    }
-  std::vector<std::array<int, 3>> ts;
-  for (const auto& t : s.triangles)
-    if (t[0] >= 0) ts.push_back({id[t[0]], id[t[1]], id[t[2]]});
-  write_obj(path, xs, ts);
-}
-
 // A one-line progress bar on stderr, only on a terminal and only once a run passes a second.
 class Progress {
  public:

@@ -22,6 +22,7 @@ class ReferenceSimulator final : public Simulator {
   ReferenceSimulator(const InputMesh& mesh, const Params& params);
 
   const char* name() const override { return "reference"; }
+  std::unique_ptr<Simulator> clone() const override { return std::make_unique<ReferenceSimulator>(*this); }
   StepEvents step() override;
   double time() const override { return time_; }
   std::uint64_t steps() const override { return steps_; }

@@ -17,6 +17,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -65,12 +66,20 @@ struct Snapshot {
   std::vector<std::array<int, 3>> triangles;    ///< per triangle id (dead: {-1,-1,-1})
 };
 
+/// Writes the live vertices (renumbered densely) and triangles of a snapshot as an OBJ, with
+/// every auxiliary spring (a crease held by a broken edge) as an `l a b` line.
+void write_snapshot_obj(const std::string& path, const Snapshot& s);
+
 class Simulator {
  public:
   virtual ~Simulator() = default;
 
   /// The backend's registry name ("reference", "fast").
   virtual const char* name() const = 0;
+
+  /// An independent copy of the whole simulation (topology, state, time, random stream
+  /// position): benchmarks restore a prepared state with it, tests compare branches.
+  virtual std::unique_ptr<Simulator> clone() const = 0;
 
   /// Advances one time step h = params.h(): forces, integration, sphere, fracture, restoration.
   virtual StepEvents step() = 0;
