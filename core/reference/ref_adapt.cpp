@@ -258,7 +258,7 @@ StepEvents ReferenceSimulator::adapt() {
   for (int e : splits) {
     const Edge& E = mesh_.edges[e];
     if (touched(E.tri[0]) || touched(E.tri[1])) continue;
-    split_edge(e, n, uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign));
+    if (!split_edge(e, n, uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign))) continue;
     for (int t : mesh_.edges[e].split.t) stamp(t);
     ++ev.splits;
   }

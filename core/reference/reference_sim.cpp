@@ -87,7 +87,9 @@ Totals ReferenceSimulator::totals() const {
     }
     const double lt = (mesh_.verts[E.a].x - mesh_.verts[E.b].x).norm();
     T.max_strain = std::max(T.max_strain, std::abs(lt / E.l0 - 1.0));
+    T.rms_strain += (lt / E.l0 - 1.0) * (lt / E.l0 - 1.0);
   }
+  T.rms_strain = std::sqrt(T.rms_strain / std::max(1, T.edges));
   return T;
 }
 

@@ -35,13 +35,13 @@ FrameStats run_frame(Simulator& sim, int substeps, int frame) {
 }
 
 std::string instability(const Totals& t, double size) {
-  const double values[] = {t.mass, t.momentum[0], t.momentum[1], t.momentum[2],
-                           t.kinetic, t.max_strain, t.max_distance, t.max_speed};
+  const double values[] = {t.mass, t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic,
+                           t.max_strain, t.rms_strain, t.max_distance, t.max_speed};
   for (double v : values)
     if (!std::isfinite(v)) return "a position or velocity is not finite";
   if (t.max_distance > 100 * size) return "a vertex left the scene (over 100 sheet sizes away)";
   if (t.max_speed > 1e4 * size) return "a vertex moves faster than 1e4 sheet sizes per second";
-  if (t.max_strain > 10) return "a spring is stretched past 11 times its rest length";
+  if (t.rms_strain > 1) return "the mesh edges are stretched to twice their rest length on average";
   return {};
 }
 

@@ -38,6 +38,7 @@ struct Totals {
   Vec3d momentum{};          ///< sum of m_k v_k
   double kinetic = 0;        ///< sum of m_k |v_k|^2 / 2
   double max_strain = 0;     ///< max over mesh edges of |lt/l0 - 1|
+  double rms_strain = 0;     ///< root mean square over mesh edges of lt/l0 - 1
   double max_distance = 0;   ///< max over vertices of |x_k - c| (c: the scene's centre)
   double max_speed = 0;      ///< max over vertices of |v_k|
 };

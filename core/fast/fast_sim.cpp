@@ -1,0 +1,137 @@
+#include "fast/fast_sim.h"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "fast/pass_timer.h"
+#include "model/random.h"
+
+namespace crumple::fast {
+
+namespace {
+constexpr int kGrain = 2048;       ///< minimum items per parallel chunk
+constexpr int kReduceBlock = 8192; ///< fixed block of the deterministic reductions
+
+}  // namespace
+
+const char* to_string(Pass p) {
+  static const char* names[] = {"normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply"};
+  return names[int(p)];
+}
+
+FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int threads)
+    : params_(params), scene_(make_scene(input, params)), par_(threads) {
+  if (params_.integrator == Integrator::Implicit)
+    throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
+  const int nv = int(input.positions.size());
+  for (int k = 0; k < nv; ++k) {
+    const int v = topo_.new_vertex();
+    topo_.V.rx[v] = float(scene_.rest[k][0]);
+    topo_.V.ry[v] = float(scene_.rest[k][1]);
+    topo_.V.rz[v] = float(scene_.rest[k][2]);
+    topo_.V.x[v] = float(scene_.position[k][0]);
+    topo_.V.y[v] = float(scene_.position[k][1]);
+    topo_.V.z[v] = float(scene_.position[k][2]);
+    topo_.V.m[v] = float(scene_.mass[k]);
+  }
+  // Edges in order of first appearance over triangles and their sides (sim/simulator.h).
+  std::map<std::pair<int, int>, int> seen;
+  for (const auto& tri : input.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int p = tri[k], q = tri[(k + 1) % 3];
+      const auto key = std::make_pair(std::min(p, q), std::max(p, q));
+      if (seen.count(key)) continue;
+      const double dx = scene_.rest[p][0] - scene_.rest[q][0], dy = scene_.rest[p][1] - scene_.rest[q][1],
+                   dz = scene_.rest[p][2] - scene_.rest[q][2];
+      seen[key] = topo_.new_edge(p, q, float(std::sqrt(dx * dx + dy * dy + dz * dz)));
+    }
+    const int t = topo_.new_triangle();
+    if (!topo_.attach(t, tri[0], tri[1], tri[2]))
+      throw InputError("mesh is not an oriented manifold at triangle " + std::to_string(t));
+  }
+  topo_.euler = topo_.live_vertices() - topo_.live_mesh_edges() + topo_.live_triangles();
+}
+
+StepConstants FastSimulator::step_constants() const {
+  StepConstants c;
+  c.h = float(params_.h());
+  c.h2 = c.h * c.h;
+  c.kappa = float(params_.kappa);
+  c.bend = float(params_.bend);
+  c.damping = float(params_.damping);
+  c.gravity = float(params_.gravity);
+  c.balanced = params_.bending == BendingForm::Balanced;
+  c.bounded = params_.predictor == Predictor::Bounded;
+  return c;
+}
+
+void FastSimulator::compute_normals() {
+  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, b, e); });
+  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, b, e); });
+}
+
+void FastSimulator::compute_forces() {
+  const StepConstants c = step_constants();
+  {
+    PassTimer t(pass_seconds_, int(Pass::EdgeForces));
+    par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); });
+  }
+  PassTimer t(pass_seconds_, int(Pass::Gather));
+  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); });
+}
+
+void FastSimulator::integrate() {
+  PassTimer timer(pass_seconds_, int(Pass::Integrate));
+  const StepConstants c = step_constants();
+  const int n = topo_.V.size();
+  float corr[3] = {0, 0, 0};
+  if (params_.integrator == Integrator::Explicit) {
+    par_.run(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
+  } else {
+    for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
+      par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, c, b, e); });
+      topo_.V.gx.swap(topo_.V.hx);
+      topo_.V.gy.swap(topo_.V.hy);
+      topo_.V.gz.swap(topo_.V.hz);
+    }
+    // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
+    double drift[3];
+    par_.sum3(n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_, c, b, e, out); }, drift);
+    double mass = 0;
+    for (int v = 0; v < n; ++v) mass += topo_.V.m[v];
+    for (int d = 0; d < 3; ++d) corr[d] = float(drift[d] / mass);
+  }
+  const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
+  const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
+  par_.run(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
+}
+
+StepEvents FastSimulator::step() {
+  {
+    PassTimer t(pass_seconds_, int(Pass::Normals));
+    compute_normals();
+  }
+  compute_forces();
+  integrate();
+  time_ += params_.h();
+  const StepEvents ev = adapt();
+  ++steps_;
+  return ev;
+}
+
+void FastSimulator::run_pass(Pass p) {
+  const StepConstants c = step_constants();
+  switch (p) {
+    case Pass::Normals: compute_normals(); break;
+    case Pass::EdgeForces: par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); }); break;
+    case Pass::Gather: par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); }); break;
+    case Pass::Integrate: integrate(); break;
+    case Pass::AdaptTest: adapt_decide(); break;
+    case Pass::TopologyApply: adapt(); break;
+    case Pass::kCount: break;
+  }
+}
+
+}  // namespace crumple::fast

@@ -1,0 +1,84 @@
+// The fast backend: the model of MODEL.md in float, structure-of-arrays, with every pass a
+// range kernel (kernels.h) run on the backend's TBB arena, and the topology edits serial.
+//
+// Design note (the whole pipeline of one step; cf. Box2D's solver.h):
+//   forces     triangle_areas -> vertex_normals -> edge_forces -> gather_forces   (4 passes)
+//              Springs, bending and predictor are computed per element and gathered per
+//              vertex over its adjacency lists: no scatter, no atomics, one summation order.
+//   integrate  K x jacobi_sweep (double-buffered guesses) -> momentum_drift (fixed-block
+//              reduction) -> advance (new v and x, sphere constraint). Explicit Euler replaces
+//              the sweeps by explicit_velocity; Baraff-Witkin runs on the reference path.
+//   adapt      triangle_areas -> vertex_normals on the new positions -> adapt_test (fracture
+//              [Eq 6] and restoration [Eq 10] decisions per edge, all on that one state) ->
+//              serial: splits in ascending edge id, then restores in ascending id, each skipped
+//              when an earlier event of the pass changed one of its triangles (MODEL.md §4).
+//   Threads only ever split a pass's range; the serial part touches O(events) elements and
+//   keeps every helper structure (adjacency, wings, msum) up to date incrementally, so a frame
+//   with a few hundred splits costs about what one without does.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "fast/kernels.h"
+#include "fast/parallel.h"
+#include "fast/topology.h"
+#include "sim/scene.h"
+#include "sim/simulator.h"
+
+namespace crumple::fast {
+
+/// The passes of a step, for per-pass timing and benchmarks.
+enum class Pass { Normals, EdgeForces, Gather, Integrate, AdaptTest, TopologyApply, kCount };
+const char* to_string(Pass);
+
+class FastSimulator final : public Simulator {
+ public:
+  FastSimulator(const InputMesh& mesh, const Params& params, int threads);
+
+  const char* name() const override { return "fast"; }
+  std::unique_ptr<Simulator> clone() const override { return std::make_unique<FastSimulator>(*this); }
+  StepEvents step() override;
+  double time() const override { return time_; }
+  std::uint64_t steps() const override { return steps_; }
+  Totals totals() const override;
+  Snapshot snapshot() const override;
+  std::string check_topology() const override { return topo_.check(); }
+  std::vector<Vec3d> normals() const override;
+  std::vector<Vec3d> forces() const override;
+  bool split(int e) override;
+  bool restore(int e) override;
+  void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;
+  void set_masses(const std::vector<double>& m) override;
+
+  /// Runs one pass of a step on the current state (benchmarks time passes one by one).
+  void run_pass(Pass p);
+  /// Seconds spent in each pass since construction (steps only).
+  const std::array<double, int(Pass::kCount)>& pass_seconds() const { return pass_seconds_; }
+  const Topology& topology() const { return topo_; }
+
+ private:
+  StepConstants step_constants() const;
+  void compute_normals();
+  void compute_forces();
+  void integrate();
+  StepEvents adapt();
+  void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
+  StepEvents adapt_apply();///< the serial splits and restores of decisions_
+  bool split_edge(int e, float flat_draw);
+  bool can_restore(int e) const;
+  void restore_edge(int e);
+
+  Params params_;
+  SceneSetup scene_;
+  Parallel par_;
+  Topology topo_;
+  double time_ = 0;
+  std::uint64_t steps_ = 0;
+  std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
+  std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
+  std::uint64_t pass_ = 0;                ///< topology passes so far
+  std::array<double, int(Pass::kCount)> pass_seconds_{};
+};
+
+}  // namespace crumple::fast

@@ -1,0 +1,107 @@
+// The fast backend's state as the rest of the program sees it: totals, snapshots, test hooks.
+#include <algorithm>
+#include <cmath>
+
+#include "fast/fast_sim.h"
+
+namespace crumple::fast {
+
+Totals FastSimulator::totals() const {
+  const Vertices& V = topo_.V;
+  Totals T;
+  T.vertices = topo_.live_vertices();
+  T.edges = topo_.live_mesh_edges();
+  T.auxiliary = topo_.live_auxiliary();
+  T.triangles = topo_.live_triangles();
+  const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
+  for (int v = 0; v < V.size(); ++v) {
+    if (!(V.m[v] > 0)) continue;
+    const double m = V.m[v], vx = V.vx[v], vy = V.vy[v], vz = V.vz[v];
+    T.mass += m;
+    T.momentum[0] += m * vx;
+    T.momentum[1] += m * vy;
+    T.momentum[2] += m * vz;
+    const double v2 = vx * vx + vy * vy + vz * vz;
+    T.kinetic += 0.5 * m * v2;
+    T.max_speed = std::max(T.max_speed, std::sqrt(v2));
+    const double dx = V.x[v] - c[0], dy = V.y[v] - c[1], dz = V.z[v] - c[2];
+    T.max_distance = std::max(T.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
+    if (!std::isfinite(V.x[v] + V.y[v] + V.z[v] + v2)) T.max_distance = NAN;
+  }
+  for (int e = 0; e < topo_.E.size(); ++e) {
+    if (topo_.E.flags[e] != (kAlive | kMesh | kBreakable) && topo_.E.flags[e] != (kAlive | kMesh)) continue;
+    const int a = topo_.E.a[e], b = topo_.E.b[e];
+    const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
+    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / topo_.E.l0[e] - 1.0;
+    T.max_strain = std::max(T.max_strain, std::abs(strain));
+    T.rms_strain += strain * strain;
+  }
+  T.rms_strain = std::sqrt(T.rms_strain / std::max(1, T.edges));
+  return T;
+}
+
+Snapshot FastSimulator::snapshot() const {
+  const Vertices& V = topo_.V;
+  Snapshot s;
+  for (int v = 0; v < V.size(); ++v) {
+    const bool alive = V.m[v] > 0;
+    s.vertex_alive.push_back(alive);
+    s.rest.push_back(alive ? Vec3d{V.rx[v], V.ry[v], V.rz[v]} : Vec3d{});
+    s.position.push_back(alive ? Vec3d{V.x[v], V.y[v], V.z[v]} : Vec3d{});
+    s.velocity.push_back(alive ? Vec3d{V.vx[v], V.vy[v], V.vz[v]} : Vec3d{});
+    s.mass.push_back(alive ? V.m[v] : 0.0);
+  }
+  for (int e = 0; e < topo_.E.size(); ++e) {
+    EdgeView ev;
+    const std::uint8_t f = topo_.E.flags[e];
+    if (f & kAlive) {
+      ev.a = topo_.E.a[e];
+      ev.b = topo_.E.b[e];
+      ev.wing_l = topo_.E.wl[e];
+      ev.wing_r = topo_.E.wr[e];
+      ev.rest = topo_.E.l0[e];
+      ev.auxiliary = !(f & kMesh);
+      ev.breakable = f & kBreakable;
+    }
+    s.edges.push_back(ev);
+  }
+  for (int t = 0; t < topo_.T.size(); ++t)
+    s.triangles.push_back(topo_.T.alive[t] ? topo_.T.corners(t) : std::array<int, 3>{-1, -1, -1});
+  return s;
+}
+
+std::vector<Vec3d> FastSimulator::normals() const {
+  FastSimulator tmp(*this);
+  tmp.compute_normals();
+  std::vector<Vec3d> out;
+  for (int v = 0; v < tmp.topo_.V.size(); ++v) out.push_back({tmp.topo_.V.nx[v], tmp.topo_.V.ny[v], tmp.topo_.V.nz[v]});
+  return out;
+}
+
+std::vector<Vec3d> FastSimulator::forces() const {
+  FastSimulator tmp(*this);
+  tmp.compute_normals();
+  tmp.compute_forces();
+  std::vector<Vec3d> out;
+  for (int v = 0; v < tmp.topo_.V.size(); ++v) out.push_back({tmp.topo_.V.fx[v], tmp.topo_.V.fy[v], tmp.topo_.V.fz[v]});
+  return out;
+}
+
+void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) {
+  Vertices& V = topo_.V;
+  for (int k = 0; k < V.size() && k < int(x.size()) && k < int(v.size()); ++k) {
+    if (!(V.m[k] > 0)) continue;
+    V.x[k] = float(x[k][0]), V.y[k] = float(x[k][1]), V.z[k] = float(x[k][2]);
+    V.vx[k] = float(v[k][0]), V.vy[k] = float(v[k][1]), V.vz[k] = float(v[k][2]);
+  }
+}
+
+void FastSimulator::set_masses(const std::vector<double>& m) {
+  Vertices& V = topo_.V;
+  for (int k = 0; k < V.size() && k < int(m.size()); ++k)
+    if (V.m[k] > 0) V.m[k] = float(m[k]);
+  for (int k = 0; k < V.size(); ++k)
+    if (V.m[k] > 0) topo_.update_msum(k);
+}
+
+}  // namespace crumple::fast

@@ -1,0 +1,60 @@
+// The fast backend's kernels. Each one computes a range [begin, end) of one pass and writes
+// only the outputs of its own elements, so the same body runs in a plain loop, inside
+// tbb::parallel_for, and in a test; no kernel scatters, so there is nothing to race on and
+// every sum has one order on any thread count (sums over a vertex's adjacency list in list
+// order). The loops are written for the auto-vectorizer (SoA arrays, no early exits, selects
+// instead of branches); CRUMPLE_DISABLE_SIMD builds the same source with vectorization off.
+#pragma once
+
+#include <cstdint>
+
+#include "fast/topology.h"
+
+namespace crumple::fast {
+
+/// Per-step constants the kernels need (float, the backend's precision).
+struct StepConstants {
+  float h = 0, h2 = 0;       ///< time step and its square
+  float kappa = 0;           ///< stiffness per unit mass [Eq 5]
+  float bend = 0;            ///< bending coefficient per unit mass [Eq 9]
+  float damping = 0;         ///< spring-axis damping per unit mass
+  float gravity = 0;         ///< acceleration along -z
+  bool balanced = true;      ///< balanced bending form (MODEL.md §6)
+  bool bounded = true;       ///< bounded predictor (docs/DECISIONS.md D1), else explicit
+};
+
+/// Area vector (x1 - x0) x (x2 - x0) of each triangle (zero for dead ones).          §1
+void triangle_areas(Topology& m, int begin, int end);
+/// n_v = normalized sum of the area vectors of v's triangles.                         §1
+void vertex_normals(Topology& m, int begin, int end);
+/// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping) and the
+/// bending magnitude s C_beta B and balanced mean of its stencil [Eq 8-9].
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end);
+/// Per vertex: gathers f_v, sum kappa, and writes the first Jacobi guess (the predictor).   §3
+void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
+/// One Jacobi sweep of the approximate implicit system: reads g, writes h.             §3
+void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);
+/// Symplectic Euler's new velocity into g: v + h f / m.                               §3
+void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end);
+/// Sum over [begin, end) of m (g - v) - h f (the momentum a finite sweep count adds), in double.
+void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[3]);
+/// v = g - correction, x += h v, then the sphere constraint (radius <= 0: none).       §3, §8
+void advance(Topology& m, const StepConstants& c, const float correction[3], const float center[3],
+             float radius, int begin, int end);
+
+/// Constants of the fracture and restoration tests.
+struct AdaptConstants {
+  float phi = 0;             ///< [Eq 6]
+  float epsilon = 0;         ///< [Eq 10]
+  float floor_length = 0;    ///< rest lengths below it never break (MODEL.md §4)
+  float step_exponent = 1;   ///< h / h_ref of P_step = 1 - (1 - P)^(h/h_ref)
+  std::uint64_t seed = 0;    ///< random stream
+  std::uint64_t step = 0;    ///< step counter of the stream
+  bool fracture = true, restoration = true;
+};
+
+/// Per edge: 1 if it breaks this step [Eq 6], 2 if it is an auxiliary edge whose crease is
+/// bent enough to restore [Eq 10] (topology conditions are checked when applied), else 0.
+void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, int begin, int end);
+
+}  // namespace crumple::fast

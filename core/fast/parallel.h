@@ -1,0 +1,63 @@
+// How the fast backend runs a kernel over [0, n): a plain loop on one thread, or
+// tbb::parallel_for in the backend's own task_arena (its thread count is the backend's, never
+// left to whatever TBB would pick). Reductions use fixed blocks, summed in block order, so the
+// result does not depend on the thread count.
+#pragma once
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <memory>
+#include <vector>
+
+namespace crumple::fast {
+
+class Parallel {
+ public:
+  explicit Parallel(int threads) : threads_(threads < 1 ? 1 : threads) {
+    if (threads_ > 1) arena_ = std::make_unique<tbb::task_arena>(threads_);
+  }
+  Parallel(const Parallel& o) : Parallel(o.threads_) {}
+  Parallel& operator=(const Parallel& o) {
+    if (this != &o) *this = Parallel(o.threads_);
+    return *this;
+  }
+  Parallel(Parallel&&) = default;
+  Parallel& operator=(Parallel&&) = default;
+
+  int threads() const { return threads_; }
+
+  /// Runs kernel(begin, end) over [0, n) in chunks of at least `grain`.
+  template <class Kernel>
+  void run(int n, int grain, const Kernel& kernel) const {
+    if (n <= 0) return;
+    if (!arena_ || n <= grain) {
+      kernel(0, n);
+      return;
+    }
+    arena_->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<int>(0, n, grain),
+                        [&](const tbb::blocked_range<int>& r) { kernel(r.begin(), r.end()); });
+    });
+  }
+
+  /// Sums partial(begin, end, out[3]) over fixed blocks of `block` items, in block order.
+  template <class Partial>
+  void sum3(int n, int block, const Partial& partial, double out[3]) const {
+    const int blocks = (n + block - 1) / block;
+    std::vector<double> parts(3 * std::size_t(blocks), 0.0);
+    run(blocks, 1, [&](int b0, int b1) {
+      for (int b = b0; b < b1; ++b) partial(b * block, std::min(n, (b + 1) * block), &parts[3 * std::size_t(b)]);
+    });
+    out[0] = out[1] = out[2] = 0;
+    for (int b = 0; b < blocks; ++b)
+      for (int d = 0; d < 3; ++d) out[d] += parts[3 * std::size_t(b) + d];
+  }
+
+ private:
+  int threads_ = 1;
+  std::unique_ptr<tbb::task_arena> arena_;
+};
+
+}  // namespace crumple::fast

@@ -1,0 +1,260 @@
+#include "fast/topology.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+namespace crumple::fast {
+
+namespace {
+template <class... A>
+void grow(std::size_t n, A&... arrays) {
+  (arrays.resize(n), ...);
+}
+
+// Erases the first `entry` from a slot list of `count` items, keeping the order.
+void erase_slot(std::int32_t* list, std::uint16_t& count, int entry) {
+  int k = 0;
+  while (k < count && list[k] != entry) ++k;
+  if (k == count) return;
+  std::copy(list + k + 1, list + count, list + k);
+  --count;
+}
+}  // namespace
+
+int Topology::new_vertex() {
+  int v;
+  if (!V.free_ids.empty()) {
+    v = V.free_ids.back();
+    V.free_ids.pop_back();
+  } else {
+    v = V.size();
+    const std::size_t n = std::size_t(v) + 1;
+    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum,
+         V.gx, V.gy, V.gz, V.hx, V.hy, V.hz, V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
+    V.springs.resize(n * V.stride_e);
+    V.tris.resize(n * V.stride_t);
+  }
+  V.n_springs[v] = V.n_tris[v] = 0;
+  return v;
+}
+
+void Topology::free_vertex(int v) {
+  V.x[v] = V.y[v] = V.z[v] = V.vx[v] = V.vy[v] = V.vz[v] = V.m[v] = 0;
+  V.nx[v] = V.ny[v] = V.nz[v] = V.rx[v] = V.ry[v] = V.rz[v] = 0;
+  V.n_springs[v] = V.n_tris[v] = 0;
+  V.free_ids.push_back(v);
+}
+
+int Topology::new_edge(int a, int b, float l0) {
+  int e;
+  if (!E.free_ids.empty()) {
+    e = E.free_ids.back();
+    E.free_ids.pop_back();
+  } else {
+    e = E.size();
+    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record,
+         E.fx, E.fy, E.fz, E.kb, E.bx, E.by, E.bz);
+  }
+  E.a[e] = a;
+  E.b[e] = b;
+  E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
+  E.l0[e] = l0;
+  E.msum[e] = V.m[a] + V.m[b];
+  E.flags[e] = kAlive | kMesh | kBreakable;
+  E.fx[e] = E.fy[e] = E.fz[e] = E.kb[e] = E.bx[e] = E.by[e] = E.bz[e] = 0;
+  list_spring(a, e << 1);
+  list_spring(b, (e << 1) | 1);
+  return e;
+}
+
+void Topology::free_edge(int e) {
+  unlist_spring(E.a[e], e << 1);
+  unlist_spring(E.b[e], (e << 1) | 1);
+  E.a[e] = E.b[e] = 0;
+  E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
+  E.l0[e] = 1;
+  E.msum[e] = 0;
+  E.flags[e] = 0;
+  E.fx[e] = E.fy[e] = E.fz[e] = E.kb[e] = E.bx[e] = E.by[e] = E.bz[e] = 0;
+  E.free_ids.push_back(e);
+}
+
+int Topology::new_triangle() {
+  int t;
+  if (!T.free_ids.empty()) {
+    t = T.free_ids.back();
+    T.free_ids.pop_back();
+  } else {
+    t = T.size();
+    grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.ax, T.ay, T.az);
+  }
+  T.v0[t] = T.v1[t] = T.v2[t] = 0;
+  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+  T.alive[t] = 1;
+  T.ax[t] = T.ay[t] = T.az[t] = 0;
+  return t;
+}
+
+void Topology::free_triangle(int t) {
+  T.v0[t] = T.v1[t] = T.v2[t] = 0;
+  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+  T.alive[t] = 0;
+  T.ax[t] = T.ay[t] = T.az[t] = 0;
+  T.free_ids.push_back(t);
+}
+
+int Topology::mesh_edge(int a, int b) const {
+  const std::int32_t* s = springs_of(a);
+  for (int k = 0; k < V.n_springs[a]; ++k) {
+    const int e = s[k] >> 1;
+    if ((E.flags[e] & kMesh) && (E.a[e] == b || E.b[e] == b)) return e;
+  }
+  return -1;
+}
+
+bool Topology::attach(int t, int a, int b, int c) {
+  const int v[3] = {a, b, c};
+  int ids[3];
+  for (int k = 0; k < 3; ++k) {
+    const int p = v[k], q = v[(k + 1) % 3], w = v[(k + 2) % 3];
+    const int e = mesh_edge(p, q);
+    if (e < 0) return false;
+    std::int32_t& slot = E.a[e] == p ? E.tri0[e] : E.tri1[e];
+    if (slot >= 0) return false;
+    slot = t;
+    (E.a[e] == p ? E.wl[e] : E.wr[e]) = w;
+    ids[k] = e;
+  }
+  T.v0[t] = a, T.v1[t] = b, T.v2[t] = c;
+  T.e0[t] = ids[0], T.e1[t] = ids[1], T.e2[t] = ids[2];
+  for (int k = 0; k < 3; ++k) list_tri(v[k], (t << 2) | k);
+  return true;
+}
+
+void Topology::detach(int t) {
+  const int v[3] = {T.v0[t], T.v1[t], T.v2[t]};
+  const int es[3] = {T.e0[t], T.e1[t], T.e2[t]};
+  for (int e : es) {
+    if (e < 0) continue;
+    if (E.tri0[e] == t) E.tri0[e] = E.wl[e] = -1;
+    if (E.tri1[e] == t) E.tri1[e] = E.wr[e] = -1;
+  }
+  for (int k = 0; k < 3; ++k) unlist_tri(v[k], (t << 2) | k);
+  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+}
+
+void Topology::update_msum(int v) {
+  const std::int32_t* s = springs_of(v);
+  for (int k = 0; k < V.n_springs[v]; ++k) {
+    const int e = s[k] >> 1;
+    E.msum[e] = V.m[E.a[e]] + V.m[E.b[e]];
+  }
+}
+
+void Topology::list_spring(int v, int entry) {
+  if (V.n_springs[v] == V.stride_e) widen(true);
+  V.springs[std::size_t(v) * V.stride_e + V.n_springs[v]++] = entry;
+}
+void Topology::unlist_spring(int v, int entry) {
+  erase_slot(&V.springs[std::size_t(v) * V.stride_e], V.n_springs[v], entry);
+}
+void Topology::list_tri(int v, int entry) {
+  if (V.n_tris[v] == V.stride_t) widen(false);
+  V.tris[std::size_t(v) * V.stride_t + V.n_tris[v]++] = entry;
+}
+void Topology::unlist_tri(int v, int entry) { erase_slot(&V.tris[std::size_t(v) * V.stride_t], V.n_tris[v], entry); }
+
+void Topology::widen(bool springs) {
+  Array<std::int32_t>& list = springs ? V.springs : V.tris;
+  int& stride = springs ? V.stride_e : V.stride_t;
+  const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
+  Array<std::int32_t> wider(std::size_t(V.size()) * stride * 2);
+  for (int v = 0; v < V.size(); ++v)
+    std::copy_n(&list[std::size_t(v) * stride], count[v], &wider[std::size_t(v) * stride * 2]);
+  list.swap(wider);
+  stride *= 2;
+}
+
+int Topology::live_vertices() const {
+  return V.size() - int(V.free_ids.size());
+}
+int Topology::live_mesh_edges() const {
+  return int(std::count_if(E.flags.begin(), E.flags.end(), [](std::uint8_t f) { return (f & (kAlive | kMesh)) == (kAlive | kMesh); }));
+}
+int Topology::live_auxiliary() const {
+  return int(std::count_if(E.flags.begin(), E.flags.end(), [](std::uint8_t f) { return (f & (kAlive | kMesh)) == kAlive; }));
+}
+int Topology::live_triangles() const { return T.size() - int(T.free_ids.size()); }
+
+std::string Topology::check() const {
+  std::ostringstream err;
+  auto fail = [&](auto&&... parts) {
+    (err << ... << parts);
+    return err.str();
+  };
+  std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
+  for (int v : V.free_ids) vertex_dead[v] = 1;
+  for (int e : E.free_ids) edge_free[e] = 1;
+  for (int t = 0; t < T.size(); ++t) {
+    if (!T.alive[t]) continue;
+    const auto v = T.corners(t);
+    const int es[3] = {T.e0[t], T.e1[t], T.e2[t]};
+    for (int k = 0; k < 3; ++k) {
+      const int p = v[k], q = v[(k + 1) % 3], e = es[k];
+      if (vertex_dead[p]) return fail("triangle ", t, " uses dead vertex ", p);
+      if (p == q || p == v[(k + 2) % 3]) return fail("triangle ", t, " repeats vertex ", p);
+      if (e < 0 || !(E.flags[e] & kAlive) || !(E.flags[e] & kMesh)) return fail("triangle ", t, " side ", k, " has no mesh edge");
+      const bool fwd = E.a[e] == p && E.b[e] == q, back = E.a[e] == q && E.b[e] == p;
+      if (!fwd && !back) return fail("edge ", e, " does not join triangle ", t, "'s side ", k);
+      if ((fwd ? E.tri0[e] : E.tri1[e]) != t) return fail("edge ", e, " does not link back to triangle ", t);
+      if ((fwd ? E.wl[e] : E.wr[e]) != v[(k + 2) % 3]) return fail("edge ", e, " has a stale wing");
+      bool listed = false;
+      const std::int32_t* s = tris_of(p);
+      for (int j = 0; j < V.n_tris[p]; ++j) listed |= s[j] == ((t << 2) | k);
+      if (!listed) return fail("triangle ", t, " is not listed at vertex ", p);
+    }
+  }
+  std::set<std::pair<int, int>> pairs;
+  for (int e = 0; e < E.size(); ++e) {
+    const std::uint8_t f = E.flags[e];
+    if (!(f & kAlive)) {
+      if (!edge_free[e]) return fail("dead edge ", e, " is not on the free list");
+      continue;
+    }
+    const int a = E.a[e], b = E.b[e];
+    if (a == b || vertex_dead[a] || vertex_dead[b]) return fail("edge ", e, " has a bad endpoint");
+    if (!(E.l0[e] > 0)) return fail("edge ", e, " has rest length ", E.l0[e]);
+    if (E.msum[e] != V.m[a] + V.m[b]) return fail("edge ", e, " has a stale msum [Eq 5]");
+    for (int end : {a, b}) {
+      const std::int32_t* s = springs_of(end);
+      const int want = (e << 1) | (end == b);
+      if (std::count(s, s + V.n_springs[end], want) != 1) return fail("edge ", e, " is not listed once at ", end);
+    }
+    if (!(f & kMesh)) {
+      if ((f & kBreakable) || E.tri0[e] >= 0 || E.tri1[e] >= 0 || E.record[e] < 0)
+        return fail("auxiliary edge ", e, " is breakable, in a triangle or has no record");
+      continue;
+    }
+    if (E.tri0[e] < 0 && E.tri1[e] < 0) return fail("mesh edge ", e, " is in no triangle");
+    for (int t : {E.tri0[e], E.tri1[e]})
+      if (t >= 0 && !T.alive[t]) return fail("edge ", e, " links dead triangle ", t);
+    if (!pairs.insert({std::min(a, b), std::max(a, b)}).second) return fail("two mesh edges join ", a, " and ", b);
+  }
+  for (int v = 0; v < V.size(); ++v) {
+    if (vertex_dead[v]) continue;
+    if (!(V.m[v] > 0) || !std::isfinite(V.m[v])) return fail("vertex ", v, " has mass ", V.m[v]);
+    if (V.n_tris[v] == 0) return fail("vertex ", v, " is in no triangle");
+    const std::int32_t* s = springs_of(v);
+    for (int k = 0; k < V.n_springs[v]; ++k) {
+      const int e = s[k] >> 1;
+      if (!(E.flags[e] & kAlive) || (s[k] & 1 ? E.b[e] : E.a[e]) != v) return fail("vertex ", v, " lists a bad spring");
+    }
+  }
+  const int chi = live_vertices() - live_mesh_edges() + live_triangles();
+  if (chi != euler) return fail("Euler characteristic ", chi, " differs from the input's ", euler);
+  return {};
+}
+
+}  // namespace crumple::fast

@@ -1,0 +1,138 @@
+// The fast backend's mesh: structure-of-arrays topology and state (Jolt's split of immutable-ish
+// topology from per-step state, Box2D's hot/cold split), and the serial topology edits.
+//
+// Vertices, edges and triangles are ids into parallel arrays; removed ids go on LIFO free lists
+// (the id policy of sim/simulator.h, identical to the reference's, so the random stream keyed
+// by edge id gives the same decisions). A dead element keeps harmless values: mass 0, no
+// adjacency, an edge with msum 0 (zero stiffness) joining vertex 0 to itself.
+//
+// Adjacency is what makes every force pass a race-free *gather*: each vertex lists its springs
+// and its triangles in fixed-stride slots (one cache line for typical valences); the stride
+// doubles, re-laid out once, when a vertex outgrows it. List order only changes by appending
+// and by order-preserving erase, so every sum over a list has one order on any thread count.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fast/aligned.h"
+
+namespace crumple::fast {
+
+/// Edge flags.
+enum : std::uint8_t {
+  kAlive = 1,      ///< the id is in use
+  kMesh = 2,       ///< a mesh edge (in 1-2 triangles); otherwise an auxiliary spring
+  kBreakable = 4,  ///< may break [Eq 6]
+};
+
+/// What a split remembers for restoration (MODEL.md §5, §7); cold data, one per auxiliary edge.
+struct SplitRecord {
+  int n = -1;                            ///< the inserted vertex
+  std::array<int, 4> k{-1, -1, -1, -1};  ///< N = {i, j, l, r}; -1 where a wing does not exist
+  std::array<int, 4> e{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
+  std::array<int, 4> t{-1, -1, -1, -1};  ///< (i,n,l), (n,j,l), (j,n,r), (n,i,r)
+  std::array<double, 4> dm{};            ///< mass each k gave to n
+  std::array<double, 4> delta{};         ///< delta_k of [Eq 3], for the paper's [Eq 11]
+  double l0 = 0;                         ///< rest length before the break
+};
+
+struct Vertices {
+  // hot, per step (float: the fast backend's precision)
+  Array<float> x, y, z;      ///< position x_k
+  Array<float> vx, vy, vz;   ///< velocity v_k
+  Array<float> m;            ///< mass m_k (0: dead)
+  Array<float> nx, ny, nz;   ///< vertex normal n_k (MODEL.md §1)
+  Array<float> fx, fy, fz;   ///< total force f_k of this step
+  Array<float> ksum;         ///< sum of kappa_e over the vertex's springs
+  Array<float> gx, gy, gz;   ///< Jacobi guess of v_k' (MODEL.md §3)
+  Array<float> hx, hy, hz;   ///< the next sweep's guess (double buffer)
+  // cold
+  Array<float> rx, ry, rz;   ///< rest position X_k
+  // adjacency (see the file comment)
+  Array<std::int32_t> springs;    ///< per vertex: stride_e slots of (edge << 1 | vertex is b)
+  Array<std::int32_t> tris;       ///< per vertex: stride_t slots of (triangle << 2 | corner)
+  Array<std::uint16_t> n_springs; ///< used slots in springs
+  Array<std::uint16_t> n_tris;    ///< used slots in tris
+  int stride_e = 16;              ///< slots per vertex in springs
+  int stride_t = 16;              ///< slots per vertex in tris
+  std::vector<int> free_ids;      ///< LIFO free list
+
+  int size() const { return int(m.size()); }
+};
+
+struct Edges {
+  Array<std::int32_t> a, b;      ///< endpoints
+  Array<std::int32_t> wl, wr;    ///< wings: third vertex of tri0 / tri1 (-1: none)
+  Array<std::int32_t> tri0, tri1;///< triangle traversing a->b / b->a (-1: none)
+  Array<float> l0;               ///< rest length
+  Array<float> msum;             ///< m_a + m_b: kappa_e = kappa msum [Eq 5], C_beta,e = bend msum
+  Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
+  Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
+  // per-step outputs of the edge pass
+  Array<float> fx, fy, fz;       ///< spring force on a (b gets the opposite)
+  Array<float> kb;               ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
+  Array<float> bx, by, bz;       ///< balanced form: mean of the stencil's four forces
+  std::vector<int> free_ids;     ///< LIFO free list
+
+  int size() const { return int(a.size()); }
+};
+
+struct Triangles {
+  Array<std::int32_t> v0, v1, v2;  ///< corners, counter-clockwise about the normal
+  Array<std::int32_t> e0, e1, e2;  ///< e_k joins v_k and v_(k+1)
+  Array<std::uint8_t> alive;       ///< 1: in use
+  Array<float> ax, ay, az;         ///< per-step area vector (twice the area times the normal)
+  std::vector<int> free_ids;       ///< LIFO free list
+
+  int size() const { return int(v0.size()); }
+  std::array<int, 3> corners(int t) const { return {v0[t], v1[t], v2[t]}; }
+};
+
+/// The whole mesh and the serial edits of its topology.
+class Topology {
+ public:
+  Vertices V;
+  Edges E;
+  Triangles T;
+  std::vector<SplitRecord> records;  ///< split records (ids recycled through free_records)
+  std::vector<int> free_records;     ///< LIFO free list of record ids
+  int euler = 0;                     ///< V - E + F of the input, kept by splits and restores
+
+  int new_vertex();
+  int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
+  int new_triangle();
+  void free_vertex(int v);
+  void free_edge(int e);  ///< unlists it from its endpoints
+  void free_triangle(int t);
+
+  int mesh_edge(int a, int b) const;  ///< live mesh edge joining a and b, or -1
+  /// Sets triangle t to (a, b, c), links its edges' slots and wings and lists t at its corners.
+  /// Returns false if an edge is missing or a slot is taken.
+  bool attach(int t, int a, int b, int c);
+  void detach(int t);  ///< the inverse of attach (t stays allocated)
+
+  /// Updates msum of every spring at vertex v (after its mass changed) [Eq 5].
+  void update_msum(int v);
+
+  int live_vertices() const;
+  int live_mesh_edges() const;
+  int live_auxiliary() const;
+  int live_triangles() const;
+  std::string check() const;  ///< empty if consistent
+
+  // Adjacency access.
+  const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(v) * V.stride_e]; }
+  const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(v) * V.stride_t]; }
+
+ private:
+  void list_spring(int v, int entry);
+  void unlist_spring(int v, int entry);
+  void list_tri(int v, int entry);
+  void unlist_tri(int v, int entry);
+  void widen(bool springs);  ///< doubles a stride, keeping every list's order
+};
+
+}  // namespace crumple::fast
