@@ -104,7 +104,7 @@ bool FastSimulator::split_edge(int e, float flat_draw) {
   D3 nu;
   for (int t : {tL, tR}) {
     if (t < 0) continue;
-    const D3 w{m.T.ax[t], m.T.ay[t], m.T.az[t]};
+    const D3 w{m.T.area[t].x, m.T.area[t].y, m.T.area[t].z};
     const double len = norm(w);
     if (len > 0) nu = {nu.x + w.x / len, nu.y + w.y / len, nu.z + w.z / len};
   }
@@ -264,6 +264,14 @@ void FastSimulator::restore_edge(int e) {
   }
   for (int k : s.k)
     if (k >= 0) m.update_msum(k);
+}
+
+std::vector<Decision> FastSimulator::decide() const {
+  FastSimulator tmp(*this);
+  tmp.adapt_decide();
+  std::vector<Decision> out(tmp.decisions_.size());
+  for (size_t e = 0; e < out.size(); ++e) out[e].kind = tmp.decisions_[e];
+  return out;
 }
 
 bool FastSimulator::split(int e) {

@@ -92,9 +92,7 @@ void FastSimulator::integrate() {
   } else {
     for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
       par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, c, b, e); });
-      topo_.V.gx.swap(topo_.V.hx);
-      topo_.V.gy.swap(topo_.V.hy);
-      topo_.V.gz.swap(topo_.V.hz);
+      topo_.V.g.swap(topo_.V.g_next);
     }
     // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
     double drift[3];

@@ -46,6 +46,7 @@ class FastSimulator final : public Simulator {
   std::string check_topology() const override { return topo_.check(); }
   std::vector<Vec3d> normals() const override;
   std::vector<Vec3d> forces() const override;
+  std::vector<Decision> decide() const override;
   bool split(int e) override;
   bool restore(int e) override;
   void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;

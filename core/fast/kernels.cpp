@@ -1,41 +1,53 @@
 #include "fast/kernels.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "model/random.h"
 
+#define CRUMPLE_SIMD_LOOP _Pragma("omp simd")
+
 namespace crumple::fast {
 
-void triangle_areas(Topology& m, int begin, int end) {
-  const std::int32_t *__restrict v0 = m.T.v0.data(), *__restrict v1 = m.T.v1.data(), *__restrict v2 = m.T.v2.data();
-  const float *__restrict x = m.V.x.data(), *__restrict y = m.V.y.data(), *__restrict z = m.V.z.data();
-  const std::uint8_t* __restrict alive = m.T.alive.data();
-  float *__restrict ax = m.T.ax.data(), *__restrict ay = m.T.ay.data(), *__restrict az = m.T.az.data();
+// GCC honours __restrict on parameters, not on local pointers: each vectorized kernel is a
+// body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
+// whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime);
+// without it GCC 12 gives up on the edge pass's many gathers ("no vectype").
+namespace {
+void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
+                         const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
+                         const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                         Float4* __restrict area, int begin, int end) {
+  CRUMPLE_SIMD_LOOP
   for (int t = begin; t < end; ++t) {
     const int a = v0[t], b = v1[t], c = v2[t];
     const float ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
     const float wx = x[c] - x[a], wy = y[c] - y[a], wz = z[c] - z[a];
     const float on = alive[t] ? 1.0f : 0.0f;
-    ax[t] = on * (uy * wz - uz * wy);
-    ay[t] = on * (uz * wx - ux * wz);
-    az[t] = on * (ux * wy - uy * wx);
+    area[t] = Float4{on * (uy * wz - uz * wy), on * (uz * wx - ux * wz), on * (ux * wy - uy * wx), 0.0f};
   }
+}
+}  // namespace
+
+void triangle_areas(Topology& m, int begin, int end) {
+  triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.x.data(), m.V.y.data(),
+                      m.V.z.data(), m.T.area.data(), begin, end);
 }
 
 void vertex_normals(Topology& m, int begin, int end) {
   const int stride = m.V.stride_t;
   const std::int32_t* __restrict tris = m.V.tris.data();
   const std::uint16_t* __restrict count = m.V.n_tris.data();
-  const float *__restrict ax = m.T.ax.data(), *__restrict ay = m.T.ay.data(), *__restrict az = m.T.az.data();
+  const Float4* __restrict area = m.T.area.data();
   float *__restrict nx = m.V.nx.data(), *__restrict ny = m.V.ny.data(), *__restrict nz = m.V.nz.data();
   for (int v = begin; v < end; ++v) {
     float sx = 0, sy = 0, sz = 0;
     const std::int32_t* list = tris + std::size_t(v) * stride;
     for (int k = 0; k < count[v]; ++k) {
-      const int t = list[k] >> 2;
-      sx += ax[t];
-      sy += ay[t];
-      sz += az[t];
+      const Float4& a = area[list[k] >> 2];
+      sx += a.x;
+      sy += a.y;
+      sz += a.z;
     }
     const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
     const float inv = len > 0 ? 1.0f / len : 0.0f;
@@ -45,29 +57,26 @@ void vertex_normals(Topology& m, int begin, int end) {
   }
 }
 
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  const std::int32_t *__restrict A = m.E.a.data(), *__restrict B = m.E.b.data();
-  const std::int32_t *__restrict WL = m.E.wl.data(), *__restrict WR = m.E.wr.data();
-  const float *__restrict l0 = m.E.l0.data(), *__restrict msum = m.E.msum.data();
-  const std::uint8_t* __restrict flags = m.E.flags.data();
-  const float *__restrict x = m.V.x.data(), *__restrict y = m.V.y.data(), *__restrict z = m.V.z.data();
-  const float *__restrict vx = m.V.vx.data(), *__restrict vy = m.V.vy.data(), *__restrict vz = m.V.vz.data();
-  const float *__restrict nx = m.V.nx.data(), *__restrict ny = m.V.ny.data(), *__restrict nz = m.V.nz.data();
-  float *__restrict fx = m.E.fx.data(), *__restrict fy = m.E.fy.data(), *__restrict fz = m.E.fz.data();
-  float *__restrict kb = m.E.kb.data();
-  float *__restrict bx = m.E.bx.data(), *__restrict by = m.E.by.data(), *__restrict bz = m.E.bz.data();
+namespace {
+void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+                      const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
+                      const float* __restrict l0, const float* __restrict msum, const std::uint8_t* __restrict flags,
+                      const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                      const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
+                      const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                      EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
+  CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
     const int a = A[e], b = B[e];
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
     const float inv = lt > 0 ? 1.0f / lt : 0.0f;
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
-    const float rel = ((vx[a] - vx[b]) * dx + (vy[a] - vy[b]) * dy + (vz[a] - vz[b]) * dz) * inv;
+    const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
+    const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
     const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum[e] * inv;
-    fx[e] = s * dx;
-    fy[e] = s * dy;
-    fz[e] = s * dz;
+    const float kap = c.kappa * msum[e];
     // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
     const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
     const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
@@ -79,51 +88,49 @@ void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
     const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
     const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
     const float k = hinge ? sign * c.bend * msum[e] * Bmag : 0.0f;
-    kb[e] = k;
     // Mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l (removed in the balanced form).
-    bx[e] = quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]);
-    by[e] = quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]);
-    bz[e] = quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]);
+    out[e] = EdgeOut{s * dx, s * dy, s * dz, kap, kap * dvx, kap * dvy, kap * dvz, k,
+                     quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
+                     quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), {0, 0, 0, 0, 0}};
   }
+}
+}  // namespace
+
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
+  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.msum.data(),
+                   m.E.flags.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
+                   m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
 }
 
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e, st = V.stride_t;
-  const std::int32_t *__restrict A = m.E.a.data(), *__restrict B = m.E.b.data();
-  const float *__restrict efx = m.E.fx.data(), *__restrict efy = m.E.fy.data(), *__restrict efz = m.E.fz.data();
-  const float *__restrict kb = m.E.kb.data(), *__restrict msum = m.E.msum.data();
-  const float *__restrict bx = m.E.bx.data(), *__restrict by = m.E.by.data(), *__restrict bz = m.E.bz.data();
-  const std::int32_t* __restrict te[3] = {m.T.e0.data(), m.T.e1.data(), m.T.e2.data()};
+  const EdgeOut* __restrict out = m.E.out.data();
   for (int v = begin; v < end; ++v) {
     float fx = 0, fy = 0, fz = 0, ks = 0, jx = 0, jy = 0, jz = 0, kn = 0, mx = 0, my = 0, mz = 0;
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const int e = springs[k] >> 1;
-      const bool is_b = springs[k] & 1;
-      const float sg = is_b ? -1.0f : 1.0f;
-      const int o = is_b ? A[e] : B[e];
-      const float kap = c.kappa * msum[e];
-      fx += sg * efx[e];
-      fy += sg * efy[e];
-      fz += sg * efz[e];
-      ks += kap;
-      jx += kap * (V.vx[o] - V.vx[v]);
-      jy += kap * (V.vy[o] - V.vy[v]);
-      jz += kap * (V.vz[o] - V.vz[v]);
-      kn -= kb[e];  // hinge role: f = -k n_v - mean
-      mx += bx[e];
-      my += by[e];
-      mz += bz[e];
+      const EdgeOut& o = out[springs[k] >> 1];
+      const float sg = (springs[k] & 1) ? -1.0f : 1.0f;  // b receives the opposite of a
+      fx += sg * o.fx;
+      fy += sg * o.fy;
+      fz += sg * o.fz;
+      ks += o.kap;
+      jx += sg * o.jx;  // kappa_e (v_other - v_v)
+      jy += sg * o.jy;
+      jz += sg * o.jz;
+      kn -= o.kb;  // hinge role: f = -k n_v - mean
+      mx += o.bx;
+      my += o.by;
+      mz += o.bz;
     }
-    const std::int32_t* tris = &V.tris[std::size_t(v) * st];
+    const std::int32_t* wings = &V.wings[std::size_t(v) * st];
     for (int k = 0; k < V.n_tris[v]; ++k) {
-      const int t = tris[k] >> 2, corner = tris[k] & 3;
-      const int e = te[corner == 2 ? 0 : corner + 1][t];  // the edge opposite v: v is its wing
-      kn += kb[e];  // wing role: f = +k n_v - mean
-      mx += bx[e];
-      my += by[e];
-      mz += bz[e];
+      const EdgeOut& o = out[wings[k]];  // v is a wing of the edge opposite it
+      kn += o.kb;  // wing role: f = +k n_v - mean
+      mx += o.bx;
+      my += o.by;
+      mz += o.bz;
     }
     const float mass = V.m[v];
     fx += kn * V.nx[v] - mx;
@@ -137,14 +144,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
       const float inv = 1.0f / (mass + 2.0f * c.h2 * ks + dead);
-      V.gx[v] = V.vx[v] + (c.h * fx + c.h2 * jx) * inv;
-      V.gy[v] = V.vy[v] + (c.h * fy + c.h2 * jy) * inv;
-      V.gz[v] = V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv;
+      V.g[v] = Float4{V.vx[v] + (c.h * fx + c.h2 * jx) * inv, V.vy[v] + (c.h * fy + c.h2 * jy) * inv,
+                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, 0.0f};
     } else {
-      const float inv = 1.0f / (mass + dead);
-      V.gx[v] = V.vx[v] + c.h * fx * inv;
-      V.gy[v] = V.vy[v] + c.h * fy * inv;
-      V.gz[v] = V.vz[v] + c.h * fz * inv;
+      const float inv = c.h / (mass + dead);
+      V.g[v] = Float4{V.vx[v] + fx * inv, V.vy[v] + fy * inv, V.vz[v] + fz * inv, 0.0f};
     }
   }
 }
@@ -152,24 +156,24 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e;
-  const std::int32_t *__restrict A = m.E.a.data(), *__restrict B = m.E.b.data();
-  const float* __restrict msum = m.E.msum.data();
+  const EdgeOut* __restrict out = m.E.out.data();
+  const Float4* __restrict g = V.g.data();
   for (int v = begin; v < end; ++v) {
     float sx = 0, sy = 0, sz = 0;
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
+    const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const int e = springs[k] >> 1;
-      const int o = (springs[k] & 1) ? A[e] : B[e];
-      const float kap = c.kappa * msum[e];
-      sx += kap * V.gx[o];
-      sy += kap * V.gy[o];
-      sz += kap * V.gz[o];
+      const float kap = out[springs[k] >> 1].kap;
+      const Float4& o = g[nbrs[k]];
+      sx += kap * o.x;
+      sy += kap * o.y;
+      sz += kap * o.z;
     }
     const float mass = V.m[v];
     const float inv = 1.0f / (mass + c.h2 * V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
-    V.hx[v] = (mass * V.vx[v] + c.h * V.fx[v] + c.h2 * sx) * inv;
-    V.hy[v] = (mass * V.vy[v] + c.h * V.fy[v] + c.h2 * sy) * inv;
-    V.hz[v] = (mass * V.vz[v] + c.h * V.fz[v] + c.h2 * sz) * inv;
+    V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + c.h2 * sx) * inv,
+                         (mass * V.vy[v] + c.h * V.fy[v] + c.h2 * sy) * inv,
+                         (mass * V.vz[v] + c.h * V.fz[v] + c.h2 * sz) * inv, 0.0f};
   }
 }
 
@@ -177,9 +181,7 @@ void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end) 
   Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
     const float inv = V.m[v] > 0 ? c.h / V.m[v] : 0.0f;
-    V.gx[v] = V.vx[v] + V.fx[v] * inv;
-    V.gy[v] = V.vy[v] + V.fy[v] * inv;
-    V.gz[v] = V.vz[v] + V.fz[v] * inv;
+    V.g[v] = Float4{V.vx[v] + V.fx[v] * inv, V.vy[v] + V.fy[v] * inv, V.vz[v] + V.fz[v] * inv, 0.0f};
   }
 }
 
@@ -187,26 +189,25 @@ void momentum_drift(const Topology& m, const StepConstants& c, int begin, int en
   const Vertices& V = m.V;
   double sx = 0, sy = 0, sz = 0;
   for (int v = begin; v < end; ++v) {
-    sx += double(V.m[v]) * (double(V.gx[v]) - V.vx[v]) - double(c.h) * V.fx[v];
-    sy += double(V.m[v]) * (double(V.gy[v]) - V.vy[v]) - double(c.h) * V.fy[v];
-    sz += double(V.m[v]) * (double(V.gz[v]) - V.vz[v]) - double(c.h) * V.fz[v];
+    sx += double(V.m[v]) * (double(V.g[v].x) - V.vx[v]) - double(c.h) * V.fx[v];
+    sy += double(V.m[v]) * (double(V.g[v].y) - V.vy[v]) - double(c.h) * V.fy[v];
+    sz += double(V.m[v]) * (double(V.g[v].z) - V.vz[v]) - double(c.h) * V.fz[v];
   }
   out[0] = sx;
   out[1] = sy;
   out[2] = sz;
 }
 
-void advance(Topology& m, const StepConstants& c, const float corr[3], const float center[3], float radius,
-             int begin, int end) {
-  Vertices& V = m.V;
-  float *__restrict x = V.x.data(), *__restrict y = V.y.data(), *__restrict z = V.z.data();
-  float *__restrict vx = V.vx.data(), *__restrict vy = V.vy.data(), *__restrict vz = V.vz.data();
-  const float *__restrict gx = V.gx.data(), *__restrict gy = V.gy.data(), *__restrict gz = V.gz.data();
-  const float* __restrict mass = V.m.data();
+namespace {
+void advance_body(const StepConstants& c, const float corr[3], const float center[3], float radius,
+                  float* __restrict x, float* __restrict y, float* __restrict z, float* __restrict vx,
+                  float* __restrict vy, float* __restrict vz, const Float4* __restrict g,
+                  const float* __restrict mass, int begin, int end) {
   const bool sphere = radius > 0;
+  CRUMPLE_SIMD_LOOP
   for (int v = begin; v < end; ++v) {
     const float on = mass[v] > 0 ? 1.0f : 0.0f;
-    float ux = on * (gx[v] - corr[0]), uy = on * (gy[v] - corr[1]), uz = on * (gz[v] - corr[2]);
+    float ux = on * (g[v].x - corr[0]), uy = on * (g[v].y - corr[1]), uz = on * (g[v].z - corr[2]);
     float px = x[v] + c.h * ux, py = y[v] + c.h * uy, pz = z[v] + c.h * uz;
     if (sphere) {
       // The manipulation sphere (§8): onto the sphere, outward velocity removed.
@@ -232,37 +233,71 @@ void advance(Topology& m, const StepConstants& c, const float corr[3], const flo
     vz[v] = uz;
   }
 }
+}  // namespace
+
+void advance(Topology& m, const StepConstants& c, const float corr[3], const float center[3], float radius,
+             int begin, int end) {
+  Vertices& V = m.V;
+  advance_body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(),
+               V.g.data(), V.m.data(), begin, end);
+}
+
+namespace {
+// [Eq 6] for every edge, branch-free so that it vectorizes: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl)
+// with c = 1 - lt/l0, made per step by P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against
+// the edge's counter-based random number. `exact_step`: h = h_ref, so P_step = P (no pow).
+template <bool exact_step>
+void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+                   const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
+                   const float* __restrict l0, const std::uint8_t* __restrict flags, const float* __restrict x,
+                   const float* __restrict y, const float* __restrict z, const float* __restrict nx,
+                   const float* __restrict ny, const float* __restrict nz, std::uint8_t* __restrict out,
+                   int begin, int end) {
+  const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
+  CRUMPLE_SIMD_LOOP
+  for (int e = begin; e < end; ++e) {
+    const int a = A[e], b = B[e];
+    const int l = WL[e] & ~(WL[e] >> 31), r = WR[e] & ~(WR[e] >> 31);  // -1 -> 0, masked below
+    const bool two_wings = (WL[e] >= 0) & (WR[e] >= 0);
+    const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
+    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const float comp = 1.0f - lt / l0[e];
+    const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
+    const float nrl = two_wings ? nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l] : 1.0f;
+    float P = 0.25f * comp * (1 - c.phi * nij) * (1 + c.phi * nrl);
+    P = std::fmin(std::fmax(P, 0.0f), 1.0f);
+    const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - P, c.step_exponent);
+    // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
+    const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(e)) << 2 | std::uint64_t(Draw::Fracture)));
+    const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
+    const bool can = (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
+    out[e] = std::uint8_t(can & (Pstep > 0) & (u < Pstep));
+  }
+}
+}  // namespace
 
 void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, int begin, int end) {
   const Vertices& V = m.V;
   const Edges& E = m.E;
+  if (c.fracture) {
+    auto run = [&](auto body) {
+      body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), V.x.data(), V.y.data(),
+           V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(), out, begin, end);
+    };
+    if (c.step_exponent == 1.0f) run(fracture_body<true>);
+    else run(fracture_body<false>);
+  } else {
+    std::fill(out + begin, out + end, std::uint8_t(0));
+  }
+  if (!c.restoration) return;
   for (int e = begin; e < end; ++e) {
-    std::uint8_t decision = 0;
     const std::uint8_t f = E.flags[e];
-    const int a = E.a[e], b = E.b[e];
-    if (c.fracture && f == (kAlive | kMesh | kBreakable) && E.l0[e] >= c.floor_length) {
-      const float dx = V.x[a] - V.x[b], dy = V.y[a] - V.y[b], dz = V.z[a] - V.z[b];
-      const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (lt < E.l0[e]) {
-        // [Eq 6] P = 1/4 c (1 - phi n_ij)(1 + phi n_rl), c = 1 - lt/l0; per step (MODEL.md §4).
-        const float comp = 1.0f - lt / E.l0[e];
-        const float nij = V.nx[a] * V.nx[b] + V.ny[a] * V.ny[b] + V.nz[a] * V.nz[b];
-        const int l = E.wl[e], r = E.wr[e];
-        const float nrl = (l >= 0 && r >= 0) ? V.nx[r] * V.nx[l] + V.ny[r] * V.ny[l] + V.nz[r] * V.nz[l] : 1.0f;
-        float P = 0.25f * comp * (1 - c.phi * nij) * (1 + c.phi * nrl);
-        P = P < 0 ? 0 : (P > 1 ? 1 : P);
-        const float Pstep = c.step_exponent == 1.0f ? P : 1.0f - std::pow(1.0f - P, c.step_exponent);
-        const float u = float(uniform(c.seed, c.step, std::uint32_t(e), Draw::Fracture));  // exact
-        decision = (Pstep > 0 && u < Pstep) ? 1 : 0;
-      }
-    }
-    if (c.restoration && (f & kAlive) && !(f & kMesh) && E.record[e] >= 0) {
-      const SplitRecord& s = m.records[E.record[e]];
-      const int l = s.k[2], r = s.k[3];
-      const float nrl = (l >= 0 && r >= 0) ? V.nx[r] * V.nx[l] + V.ny[r] * V.ny[l] + V.nz[r] * V.nz[l] : 1.0f;
-      decision = (1.0f - nrl) * 0.5f >= c.epsilon ? 2 : 0;  // [Eq 10]
-    }
-    out[e] = decision;
+    if (!(f & kAlive) || (f & kMesh) || E.record[e] < 0) continue;
+    // [Eq 10]: the crease line is bent across enough to open again.
+    const SplitRecord& s = m.records[E.record[e]];
+    const int l = s.k[2], r = s.k[3];
+    const float nrl = (l >= 0 && r >= 0) ? V.nx[r] * V.nx[l] + V.ny[r] * V.ny[l] + V.nz[r] * V.nz[l] : 1.0f;
+    if ((1.0f - nrl) * 0.5f >= c.epsilon) out[e] = 2;
   }
 }
 

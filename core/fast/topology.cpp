@@ -13,12 +13,14 @@ void grow(std::size_t n, A&... arrays) {
   (arrays.resize(n), ...);
 }
 
-// Erases the first `entry` from a slot list of `count` items, keeping the order.
-void erase_slot(std::int32_t* list, std::uint16_t& count, int entry) {
+// Erases `entry` from a slot list of `count` items and the same slot of its parallel list,
+// keeping the order.
+void erase_slot(std::int32_t* list, std::int32_t* parallel, std::uint16_t& count, int entry) {
   int k = 0;
   while (k < count && list[k] != entry) ++k;
   if (k == count) return;
   std::copy(list + k + 1, list + count, list + k);
+  std::copy(parallel + k + 1, parallel + count, parallel + k);
   --count;
 }
 }  // namespace
@@ -32,9 +34,11 @@ int Topology::new_vertex() {
     v = V.size();
     const std::size_t n = std::size_t(v) + 1;
     grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum,
-         V.gx, V.gy, V.gz, V.hx, V.hy, V.hz, V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
+         V.g, V.g_next, V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
     V.springs.resize(n * V.stride_e);
+    V.nbrs.resize(n * V.stride_e);
     V.tris.resize(n * V.stride_t);
+    V.wings.resize(n * V.stride_t);
   }
   V.n_springs[v] = V.n_tris[v] = 0;
   return v;
@@ -54,8 +58,7 @@ int Topology::new_edge(int a, int b, float l0) {
     E.free_ids.pop_back();
   } else {
     e = E.size();
-    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record,
-         E.fx, E.fy, E.fz, E.kb, E.bx, E.by, E.bz);
+    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
   }
   E.a[e] = a;
   E.b[e] = b;
@@ -63,9 +66,9 @@ int Topology::new_edge(int a, int b, float l0) {
   E.l0[e] = l0;
   E.msum[e] = V.m[a] + V.m[b];
   E.flags[e] = kAlive | kMesh | kBreakable;
-  E.fx[e] = E.fy[e] = E.fz[e] = E.kb[e] = E.bx[e] = E.by[e] = E.bz[e] = 0;
-  list_spring(a, e << 1);
-  list_spring(b, (e << 1) | 1);
+  E.out[e] = EdgeOut{};
+  list_spring(a, e << 1, b);
+  list_spring(b, (e << 1) | 1, a);
   return e;
 }
 
@@ -77,7 +80,7 @@ void Topology::free_edge(int e) {
   E.l0[e] = 1;
   E.msum[e] = 0;
   E.flags[e] = 0;
-  E.fx[e] = E.fy[e] = E.fz[e] = E.kb[e] = E.bx[e] = E.by[e] = E.bz[e] = 0;
+  E.out[e] = EdgeOut{};
   E.free_ids.push_back(e);
 }
 
@@ -88,12 +91,12 @@ int Topology::new_triangle() {
     T.free_ids.pop_back();
   } else {
     t = T.size();
-    grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.ax, T.ay, T.az);
+    grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
   }
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 1;
-  T.ax[t] = T.ay[t] = T.az[t] = 0;
+  T.area[t] = Float4{};
   return t;
 }
 
@@ -101,7 +104,7 @@ void Topology::free_triangle(int t) {
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 0;
-  T.ax[t] = T.ay[t] = T.az[t] = 0;
+  T.area[t] = Float4{};
   T.free_ids.push_back(t);
 }
 
@@ -129,7 +132,7 @@ bool Topology::attach(int t, int a, int b, int c) {
   }
   T.v0[t] = a, T.v1[t] = b, T.v2[t] = c;
   T.e0[t] = ids[0], T.e1[t] = ids[1], T.e2[t] = ids[2];
-  for (int k = 0; k < 3; ++k) list_tri(v[k], (t << 2) | k);
+  for (int k = 0; k < 3; ++k) list_tri(v[k], (t << 2) | k, ids[(k + 1) % 3]);  // opposite edge
   return true;
 }
 
@@ -153,27 +156,36 @@ void Topology::update_msum(int v) {
   }
 }
 
-void Topology::list_spring(int v, int entry) {
+void Topology::list_spring(int v, int entry, int other) {
   if (V.n_springs[v] == V.stride_e) widen(true);
-  V.springs[std::size_t(v) * V.stride_e + V.n_springs[v]++] = entry;
+  const std::size_t slot = std::size_t(v) * V.stride_e + V.n_springs[v]++;
+  V.springs[slot] = entry;
+  V.nbrs[slot] = other;
 }
 void Topology::unlist_spring(int v, int entry) {
-  erase_slot(&V.springs[std::size_t(v) * V.stride_e], V.n_springs[v], entry);
+  const std::size_t base = std::size_t(v) * V.stride_e;
+  erase_slot(&V.springs[base], &V.nbrs[base], V.n_springs[v], entry);
 }
-void Topology::list_tri(int v, int entry) {
+void Topology::list_tri(int v, int entry, int wing_edge) {
   if (V.n_tris[v] == V.stride_t) widen(false);
-  V.tris[std::size_t(v) * V.stride_t + V.n_tris[v]++] = entry;
+  const std::size_t slot = std::size_t(v) * V.stride_t + V.n_tris[v]++;
+  V.tris[slot] = entry;
+  V.wings[slot] = wing_edge;
 }
-void Topology::unlist_tri(int v, int entry) { erase_slot(&V.tris[std::size_t(v) * V.stride_t], V.n_tris[v], entry); }
+void Topology::unlist_tri(int v, int entry) {
+  const std::size_t base = std::size_t(v) * V.stride_t;
+  erase_slot(&V.tris[base], &V.wings[base], V.n_tris[v], entry);
+}
 
 void Topology::widen(bool springs) {
-  Array<std::int32_t>& list = springs ? V.springs : V.tris;
   int& stride = springs ? V.stride_e : V.stride_t;
   const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
-  Array<std::int32_t> wider(std::size_t(V.size()) * stride * 2);
-  for (int v = 0; v < V.size(); ++v)
-    std::copy_n(&list[std::size_t(v) * stride], count[v], &wider[std::size_t(v) * stride * 2]);
-  list.swap(wider);
+  for (Array<std::int32_t>* list : springs ? std::array{&V.springs, &V.nbrs} : std::array{&V.tris, &V.wings}) {
+    Array<std::int32_t> wider(std::size_t(V.size()) * stride * 2);
+    for (int v = 0; v < V.size(); ++v)
+      std::copy_n(&(*list)[std::size_t(v) * stride], count[v], &wider[std::size_t(v) * stride * 2]);
+    list->swap(wider);
+  }
   stride *= 2;
 }
 
@@ -211,8 +223,9 @@ std::string Topology::check() const {
       if ((fwd ? E.tri0[e] : E.tri1[e]) != t) return fail("edge ", e, " does not link back to triangle ", t);
       if ((fwd ? E.wl[e] : E.wr[e]) != v[(k + 2) % 3]) return fail("edge ", e, " has a stale wing");
       bool listed = false;
-      const std::int32_t* s = tris_of(p);
-      for (int j = 0; j < V.n_tris[p]; ++j) listed |= s[j] == ((t << 2) | k);
+      const std::int32_t *s = tris_of(p), *w = wings_of(p);
+      const int opposite = es[(k + 1) % 3];
+      for (int j = 0; j < V.n_tris[p]; ++j) listed |= s[j] == ((t << 2) | k) && w[j] == opposite;
       if (!listed) return fail("triangle ", t, " is not listed at vertex ", p);
     }
   }
@@ -246,10 +259,11 @@ std::string Topology::check() const {
     if (vertex_dead[v]) continue;
     if (!(V.m[v] > 0) || !std::isfinite(V.m[v])) return fail("vertex ", v, " has mass ", V.m[v]);
     if (V.n_tris[v] == 0) return fail("vertex ", v, " is in no triangle");
-    const std::int32_t* s = springs_of(v);
+    const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
     for (int k = 0; k < V.n_springs[v]; ++k) {
       const int e = s[k] >> 1;
-      if (!(E.flags[e] & kAlive) || (s[k] & 1 ? E.b[e] : E.a[e]) != v) return fail("vertex ", v, " lists a bad spring");
+      if (!(E.flags[e] & kAlive) || (s[k] & 1 ? E.b[e] : E.a[e]) != v || (s[k] & 1 ? E.a[e] : E.b[e]) != nb[k])
+        return fail("vertex ", v, " lists a bad spring");
     }
   }
   const int chi = live_vertices() - live_mesh_edges() + live_triangles();

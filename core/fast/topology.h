@@ -39,6 +39,23 @@ struct SplitRecord {
   double l0 = 0;                         ///< rest length before the break
 };
 
+/// A 3-vector padded to 16 bytes: state that the kernels gather at random (one load, one line).
+struct alignas(16) Float4 {
+  float x = 0, y = 0, z = 0, w = 0;
+};
+
+/// What the edge pass leaves for the vertex gather, packed so that one spring costs one cache
+/// line in the gather (the gather reads these at random, the edge pass writes them in order).
+/// 64 bytes: GCC vectorizes the edge pass's interleaved stores for 16 floats (not for 12).
+struct alignas(64) EdgeOut {
+  float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
+  float kap = 0;                 ///< kappa_e [Eq 5]
+  float jx = 0, jy = 0, jz = 0;  ///< kappa_e (v_b - v_a): the edge's part of (df/dx) v
+  float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
+  float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
+  float pad[5] = {};             ///< to 64 bytes
+};
+
 struct Vertices {
   // hot, per step (float: the fast backend's precision)
   Array<float> x, y, z;      ///< position x_k
@@ -47,13 +64,15 @@ struct Vertices {
   Array<float> nx, ny, nz;   ///< vertex normal n_k (MODEL.md §1)
   Array<float> fx, fy, fz;   ///< total force f_k of this step
   Array<float> ksum;         ///< sum of kappa_e over the vertex's springs
-  Array<float> gx, gy, gz;   ///< Jacobi guess of v_k' (MODEL.md §3)
-  Array<float> hx, hy, hz;   ///< the next sweep's guess (double buffer)
+  Array<Float4> g;           ///< Jacobi guess of v_k' (MODEL.md §3), gathered by neighbours
+  Array<Float4> g_next;      ///< the next sweep's guess (double buffer)
   // cold
   Array<float> rx, ry, rz;   ///< rest position X_k
   // adjacency (see the file comment)
   Array<std::int32_t> springs;    ///< per vertex: stride_e slots of (edge << 1 | vertex is b)
+  Array<std::int32_t> nbrs;       ///< per vertex: the other endpoint of each spring slot
   Array<std::int32_t> tris;       ///< per vertex: stride_t slots of (triangle << 2 | corner)
+  Array<std::int32_t> wings;      ///< per vertex: the edge opposite it in each triangle slot
   Array<std::uint16_t> n_springs; ///< used slots in springs
   Array<std::uint16_t> n_tris;    ///< used slots in tris
   int stride_e = 16;              ///< slots per vertex in springs
@@ -71,10 +90,7 @@ struct Edges {
   Array<float> msum;             ///< m_a + m_b: kappa_e = kappa msum [Eq 5], C_beta,e = bend msum
   Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
-  // per-step outputs of the edge pass
-  Array<float> fx, fy, fz;       ///< spring force on a (b gets the opposite)
-  Array<float> kb;               ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
-  Array<float> bx, by, bz;       ///< balanced form: mean of the stencil's four forces
+  Array<EdgeOut> out;            ///< per-step output of the edge pass
   std::vector<int> free_ids;     ///< LIFO free list
 
   int size() const { return int(a.size()); }
@@ -84,7 +100,7 @@ struct Triangles {
   Array<std::int32_t> v0, v1, v2;  ///< corners, counter-clockwise about the normal
   Array<std::int32_t> e0, e1, e2;  ///< e_k joins v_k and v_(k+1)
   Array<std::uint8_t> alive;       ///< 1: in use
-  Array<float> ax, ay, az;         ///< per-step area vector (twice the area times the normal)
+  Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
   std::vector<int> free_ids;       ///< LIFO free list
 
   int size() const { return int(v0.size()); }
@@ -126,11 +142,13 @@ class Topology {
   // Adjacency access.
   const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(v) * V.stride_e]; }
   const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(v) * V.stride_t]; }
+  const std::int32_t* nbrs_of(int v) const { return &V.nbrs[std::size_t(v) * V.stride_e]; }
+  const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(v) * V.stride_t]; }
 
  private:
-  void list_spring(int v, int entry);
+  void list_spring(int v, int entry, int other);
   void unlist_spring(int v, int entry);
-  void list_tri(int v, int entry);
+  void list_tri(int v, int entry, int wing_edge);
   void unlist_tri(int v, int entry);
   void widen(bool springs);  ///< doubles a stride, keeping every list's order
 };

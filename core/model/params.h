@@ -42,11 +42,11 @@ struct Params {
   // --- adaptive mesh (MODEL.md §4, §5, §7) ---
   bool fracture = true;         ///< stochastic fracture on/off
   bool restoration = true;      ///< restoration on/off
-  double phi = 0.5;             ///< curvature sensitivity of fracture            [Eq 6]
+  double phi = 0.75;            ///< curvature sensitivity of fracture            [Eq 6]
   double psi = 0.5;             ///< new-vertex offset scale                       [Eq 7]
   double epsilon = 0.5;         ///< restoration threshold                         [Eq 10]
   double varphi = 2.0;          ///< mass-split exponent (>= 1)                    [Eq 3]
-  double floor = 0.25;          ///< refinement floor: edges with rest length below floor x the
+  double floor = 0.5;           ///< refinement floor: edges with rest length below floor x the
                                 ///< initial mean edge length never break
   RestoreForm restore = RestoreForm::Exact;
   std::uint64_t seed = 1;       ///< seed of the counter-based random stream

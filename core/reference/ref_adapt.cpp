@@ -228,6 +228,28 @@ bool ReferenceSimulator::restore(int e) {
   return true;
 }
 
+std::vector<Decision> ReferenceSimulator::decide() const {
+  std::vector<Decision> out(mesh_.edges.size());
+  const std::vector<V3> n = vertex_normals();
+  for (int e = 0; e < int(mesh_.edges.size()); ++e) {
+    const Edge& E = mesh_.edges[e];
+    if (!E.alive) continue;
+    if (params_.fracture && !E.auxiliary) {
+      const double P = break_probability(e, n);
+      const double u = uniform(params_.seed, steps_, std::uint32_t(e), Draw::Fracture);
+      out[e].margin = P - u;
+      if (P > 0 && u < P) out[e].kind = 1;
+    }
+    if (params_.restoration && E.auxiliary && E.split.n >= 0) {
+      const int l = E.split.k[2], r = E.split.k[3];
+      const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
+      if ((1.0 - n_rl) / 2.0 >= params_.epsilon) out[e].kind = 2;
+      out[e].margin = (1.0 - n_rl) / 2.0 - params_.epsilon;
+    }
+  }
+  return out;
+}
+
 StepEvents ReferenceSimulator::adapt() {
   StepEvents ev;
   if (!params_.fracture && !params_.restoration) return ev;

@@ -31,6 +31,7 @@ class ReferenceSimulator final : public Simulator {
   std::string check_topology() const override { return mesh_.check(); }
   std::vector<Vec3d> normals() const override;
   std::vector<Vec3d> forces() const override;
+  std::vector<Decision> decide() const override;
   bool split(int e) override;
   bool restore(int e) override;
   void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;

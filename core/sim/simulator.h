@@ -49,6 +49,12 @@ struct StepEvents {
   int restores = 0;  ///< auxiliary edges restored               [Eq 10-12]
 };
 
+/// The adaptive-mesh tests of one edge on the current state (MODEL.md §4, §7), before applying.
+struct Decision {
+  std::uint8_t kind = 0;  ///< 0 none, 1 breaks [Eq 6], 2 restoration angle test passes [Eq 10]
+  double margin = 0;      ///< kind 1 candidates: P_step - u (how far from the other outcome)
+};
+
 /// One spring as a test sees it.
 struct EdgeView {
   int a = -1, b = -1;          ///< endpoint vertex ids
@@ -101,6 +107,9 @@ class Simulator {
   virtual std::vector<Vec3d> normals() const = 0;
   /// Total force on each vertex (springs, bending, gravity, damping), per vertex id.
   virtual std::vector<Vec3d> forces() const = 0;
+  /// The fracture and restoration decisions the next step's adapt pass would take on the
+  /// current positions (per edge id; before the in-pass skipping of touched triangles).
+  virtual std::vector<Decision> decide() const = 0;
   /// Splits edge e now (as if it broke), if it is a live breakable mesh edge. Returns success.
   virtual bool split(int e) = 0;
   /// Restores auxiliary edge e now, if the mesh allows it (MODEL.md §7), ignoring the angle test.

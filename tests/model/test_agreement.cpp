@@ -1,0 +1,132 @@
+// The fast backend against the scalar reference: same forces, normals and step within float
+// tolerance; the same fracture and restoration decisions but where a probability is within float
+// round-off of its random number; the same totals over a long crumple.
+#include <cmath>
+
+#include "sim/run.h"
+#include "support/fixtures.h"
+
+namespace crumple::test {
+namespace {
+
+std::unique_ptr<Simulator> sim(const std::string& backend, const InputMesh& m, const Params& p) {
+  return make_simulator(backend, m, p, 1);
+}
+
+// Largest |a - b| over live vertices, relative to the largest |a|.
+double rel_diff(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b, const std::vector<bool>& alive) {
+  double diff = 0, scale = 1e-30;
+  for (size_t k = 0; k < a.size(); ++k) {
+    if (!alive[k]) continue;
+    diff = std::max(diff, (v3(a[k]) - v3(b[k])).norm());
+    scale = std::max(scale, v3(a[k]).norm());
+  }
+  return diff / scale;
+}
+
+// A mid-crumple state of the reference, copied into a fast simulator of identical topology by
+// running both in lockstep with the fast state overwritten by the reference's every step.
+struct Lockstep {
+  std::unique_ptr<Simulator> ref, fast;
+  int borderline = 0;  ///< decisions that differ with |P - u| within float round-off
+  int compared = 0;    ///< decisions compared
+  bool diverged = false;
+
+  Lockstep(const InputMesh& m, const Params& p) : ref(sim("reference", m, p)), fast(sim("fast", m, p)) {}
+
+  void sync() {
+    const Snapshot s = ref->snapshot();
+    fast->set_masses(s.mass);
+    fast->set_state(s.position, s.velocity);
+  }
+  // Compares the decisions on the synced state, then steps both. Returns false on divergence.
+  bool step() {
+    sync();
+    const auto a = ref->decide(), b = fast->decide();
+    EXPECT_EQ(a.size(), b.size());
+    for (size_t e = 0; e < a.size() && e < b.size(); ++e) {
+      ++compared;
+      if (a[e].kind == b[e].kind) continue;
+      // Float round-off of P (relative ~1e-6) decides only when P_step is that close to u.
+      EXPECT_LT(std::abs(a[e].margin), 1e-4) << "edge " << e << " ref " << int(a[e].kind) << " fast " << int(b[e].kind);
+      ++borderline;
+    }
+    ref->step();
+    fast->step();
+    if (ref->snapshot().triangles != fast->snapshot().triangles) diverged = true;
+    return !diverged;
+  }
+};
+
+TEST(Agreement, ForcesNormalsAndOneStepOnGridsAndMeshes) {
+  std::vector<std::pair<std::string, InputMesh>> meshes = {{"grid 16", make_grid(16)},
+                                                           {"grid 9 fixed", make_grid(9, false)}};
+  for (const char* name : {"woody.obj", "spot.obj"}) meshes.push_back({name, load_obj(data_file(name))});
+  for (const auto& [name, m] : meshes) {
+    for (Integrator integ : {Integrator::Approx, Integrator::Explicit}) {
+      Params p;
+      p.integrator = integ;
+      p.kappa = integ == Integrator::Explicit ? 50 : p.kappa;
+      p.gravity = 9.81;
+      p.fracture = p.restoration = false;
+      Lockstep ls(m, p);
+      for (int k = 0; k < 5; ++k) {  // a state with motion and curvature, same clock on both
+        ls.sync();
+        ls.ref->step();
+        ls.fast->step();
+      }
+      ls.sync();
+      const auto alive = ls.ref->snapshot().vertex_alive;
+      EXPECT_LT(rel_diff(ls.ref->normals(), ls.fast->normals(), alive), 1e-5) << name;
+      EXPECT_LT(rel_diff(ls.ref->forces(), ls.fast->forces(), alive), 1e-4) << name;
+      ls.ref->step();
+      ls.fast->step();
+      const Snapshot a = ls.ref->snapshot(), b = ls.fast->snapshot();
+      EXPECT_LT(rel_diff(a.velocity, b.velocity, alive), 1e-4) << name << " " << to_string(integ);
+      EXPECT_LT(rel_diff(a.position, b.position, alive), 1e-5) << name << " " << to_string(integ);
+    }
+  }
+}
+
+// Fracture and restoration decisions on identical states: equal but for round-off cases.
+TEST(Agreement, SameDecisionsButForRoundOff) {
+  Params p;
+  Lockstep ls(make_grid(24), p);
+  int steps = 0;
+  while (steps < 150 && ls.step()) ++steps;
+  RecordProperty("steps_in_lockstep", steps);
+  RecordProperty("decisions_compared", ls.compared);
+  RecordProperty("borderline_decisions", ls.borderline);
+  std::printf("lockstep: %d steps, %d decisions compared, %d differ within round-off\n", steps, ls.compared,
+              ls.borderline);
+  EXPECT_GE(steps, 30);  // long enough for hundreds of splits and restores
+  EXPECT_LE(ls.borderline, ls.compared / 10000 + 3);
+}
+
+// A 600-frame sphere crumple run independently on both: totals agree within a few per cent
+// (the trajectories differ after the first round-off decision, the statistics must not).
+TEST(Agreement, TotalsOverALongCrumple) {
+  Params p;
+  const InputMesh m = make_grid(32);
+  long splits[2] = {0, 0}, restores[2] = {0, 0};
+  Totals t[2];
+  int i = 0;
+  for (const char* b : {"reference", "fast"}) {
+    auto s = sim(b, m, p);
+    for (int f = 0; f < 600; ++f) {
+      const StepEvents ev = s->step();
+      splits[i] += ev.splits;
+      restores[i] += ev.restores;
+    }
+    t[i++] = s->totals();
+  }
+  std::printf("600 frames: reference %d vertices %ld splits %ld restores; fast %d vertices %ld splits %ld restores\n",
+              t[0].vertices, splits[0], restores[0], t[1].vertices, splits[1], restores[1]);
+  EXPECT_NEAR(t[1].vertices, t[0].vertices, 0.05 * t[0].vertices);
+  EXPECT_NEAR(splits[1], splits[0], 0.05 * splits[0]);
+  EXPECT_NEAR(restores[1], restores[0], 0.05 * restores[0]);
+  EXPECT_NEAR(t[1].mass, t[0].mass, 1e-5);
+}
+
+}  // namespace
+}  // namespace crumple::test
