@@ -59,9 +59,11 @@ StepEvents FastSimulator::adapt_apply() {
     if (decisions_[e] == 2) restores.push_back(e);
   }
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
+  std::vector<int> changed;  // triangles changed in this pass
   auto stamp = [&](int t) {
     if (t < 0) return;
     if (t >= int(tri_stamp_.size())) tri_stamp_.resize(std::size_t(t) + 1, 0);
+    if (tri_stamp_[t] != pass_) changed.push_back(t);
     tri_stamp_[t] = pass_;
   };
   for (int e : splits) {
@@ -77,6 +79,18 @@ StepEvents FastSimulator::adapt_apply() {
     for (int k : t) stamp(k);
     ++ev.restores;
   }
+  // Bring the areas and normals computed for the decisions up to date where the topology
+  // changed, so the next step need not recompute them all (range kernels on single elements).
+  std::vector<int> verts;
+  for (int t : changed) {
+    if (!topo_.T.alive[t]) continue;
+    triangle_areas(topo_, t, t + 1);
+    for (int v : topo_.T.corners(t)) verts.push_back(v);
+  }
+  std::sort(verts.begin(), verts.end());
+  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+  for (int v : verts) vertex_normals(topo_, v, v + 1);
+  normals_valid_ = true;
   return ev;
 }
 
@@ -277,11 +291,13 @@ std::vector<Decision> FastSimulator::decide() const {
 bool FastSimulator::split(int e) {
   if (e < 0 || e >= topo_.E.size()) return false;
   compute_normals();
+  normals_valid_ = false;
   return split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign)));
 }
 
 bool FastSimulator::restore(int e) {
   if (!can_restore(e)) return false;
+  normals_valid_ = false;
   restore_edge(e);
   return true;
 }

@@ -107,10 +107,11 @@ void FastSimulator::integrate() {
 }
 
 StepEvents FastSimulator::step() {
-  {
+  if (!normals_valid_) {  // else the adapt pass of the last step left them current
     PassTimer t(pass_seconds_, int(Pass::Normals));
     compute_normals();
   }
+  normals_valid_ = false;
   compute_forces();
   integrate();
   time_ += params_.h();

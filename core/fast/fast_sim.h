@@ -79,6 +79,7 @@ class FastSimulator final : public Simulator {
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::uint64_t pass_ = 0;                ///< topology passes so far
+  bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};
 };
 

@@ -94,6 +94,7 @@ void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec
     V.x[k] = float(x[k][0]), V.y[k] = float(x[k][1]), V.z[k] = float(x[k][2]);
     V.vx[k] = float(v[k][0]), V.vy[k] = float(v[k][1]), V.vz[k] = float(v[k][2]);
   }
+  normals_valid_ = false;
 }
 
 void FastSimulator::set_masses(const std::vector<double>& m) {
