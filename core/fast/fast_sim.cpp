@@ -26,6 +26,10 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   if (params_.integrator == Integrator::Implicit)
     throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
   const int nv = int(input.positions.size());
+  const std::size_t nt = input.triangles.size();
+  // Refinement grows a mesh about 4x at the default floor: room for that up front.
+  const std::size_t room = (params_.fracture ? 4 : 1);
+  topo_.reserve(room * nv, room * 2 * nt, room * nt);
   for (int k = 0; k < nv; ++k) {
     const int v = topo_.new_vertex();
     topo_.V.rx[v] = float(scene_.rest[k][0]);
@@ -52,6 +56,13 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
       throw InputError("mesh is not an oriented manifold at triangle " + std::to_string(t));
   }
   topo_.euler = topo_.live_vertices() - topo_.live_mesh_edges() + topo_.live_triangles();
+}
+
+FastSimulator::FastSimulator(const FastSimulator& o)
+    : params_(o.params_), scene_(o.scene_), par_(o.par_), topo_(o.topo_), time_(o.time_), steps_(o.steps_),
+      decisions_(o.decisions_), tri_stamp_(o.tri_stamp_), pass_(o.pass_), normals_valid_(o.normals_valid_),
+      pass_seconds_(o.pass_seconds_) {
+  topo_.reserve(o.topo_.V.m.capacity(), o.topo_.E.a.capacity(), o.topo_.T.v0.capacity());
 }
 
 StepConstants FastSimulator::step_constants() const {

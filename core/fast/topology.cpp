@@ -25,6 +25,24 @@ void erase_slot(std::int32_t* list, std::int32_t* parallel, std::uint16_t& count
 }
 }  // namespace
 
+namespace {
+template <class... A>
+void reserve_all(std::size_t n, A&... arrays) {
+  (arrays.reserve(n), ...);
+}
+}  // namespace
+
+void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
+  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next,
+              V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
+  V.springs.reserve(nv * V.stride_e);
+  V.nbrs.reserve(nv * V.stride_e);
+  V.tris.reserve(nv * V.stride_t);
+  V.wings.reserve(nv * V.stride_t);
+  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
+  reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
+}
+
 int Topology::new_vertex() {
   int v;
   if (!V.free_ids.empty()) {
@@ -109,11 +127,9 @@ void Topology::free_triangle(int t) {
 }
 
 int Topology::mesh_edge(int a, int b) const {
-  const std::int32_t* s = springs_of(a);
-  for (int k = 0; k < V.n_springs[a]; ++k) {
-    const int e = s[k] >> 1;
-    if ((E.flags[e] & kMesh) && (E.a[e] == b || E.b[e] == b)) return e;
-  }
+  const std::int32_t *s = springs_of(a), *nb = nbrs_of(a);
+  for (int k = 0; k < V.n_springs[a]; ++k)
+    if (nb[k] == b && (E.flags[s[k] >> 1] & kMesh)) return s[k] >> 1;
   return -1;
 }
 
@@ -149,10 +165,10 @@ void Topology::detach(int t) {
 }
 
 void Topology::update_msum(int v) {
-  const std::int32_t* s = springs_of(v);
+  const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
   for (int k = 0; k < V.n_springs[v]; ++k) {
     const int e = s[k] >> 1;
-    E.msum[e] = V.m[E.a[e]] + V.m[E.b[e]];
+    E.msum[e] = (s[k] & 1) ? V.m[nb[k]] + V.m[v] : V.m[v] + V.m[nb[k]];  // m_a + m_b, in that order
   }
 }
 

@@ -117,6 +117,10 @@ class Topology {
   std::vector<int> free_records;     ///< LIFO free list of record ids
   int euler = 0;                     ///< V - E + F of the input, kept by splits and restores
 
+  /// Reserves room for this many elements of each kind, so refinement appends without
+  /// reallocating (growth past it is geometric, as for any vector).
+  void reserve(std::size_t vertices, std::size_t edges, std::size_t triangles);
+
   int new_vertex();
   int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
   int new_triangle();
