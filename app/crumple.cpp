@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
   run->add_option("--epsilon", p.epsilon, "restoration threshold [Eq 10]")->capture_default_str();
   run->add_option("--varphi", p.varphi, "mass-split exponent [Eq 3]")->capture_default_str();
   run->add_option("--floor", p.floor, "refinement floor, fraction of the mean edge length")->capture_default_str();
+  run->add_option("--perturb", p.perturb, "initial dome height / sheet reach (0: start flat)")->capture_default_str();
   run->add_option("--gravity", p.gravity, "gravity along -z, m/s^2")->capture_default_str();
   run->add_option("--mass", p.total_mass, "total sheet mass")->capture_default_str();
   run->add_option("--restore", p.restore, "exact | paper")

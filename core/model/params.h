@@ -21,6 +21,8 @@ struct Params {
   double sphere_start = 1.0;    ///< R0 as a fraction of the farthest vertex's distance from the centroid
   double sphere_end = 0.3;      ///< R1, same unit as sphere_start
   double sphere_time = 2.0;     ///< seconds for the sphere to shrink from R0 to R1 (then it holds)
+  double perturb = 0.03;        ///< initial dome along the rest normals, height as a fraction
+                                ///< of the sheet's reach (a real sheet is never exactly flat)
   double gravity = 0.0;         ///< m/s^2 along -z
   double total_mass = 1.0;      ///< sheet mass, spread by vertex area
 

@@ -51,7 +51,25 @@ SceneSetup make_scene(const InputMesh& mesh, const Params& p) {
   s.size = dist(lo, hi);
   for (const Vec3d& x : s.rest) s.reach = std::max(s.reach, dist(x, s.center));
 
+  // The initial dome (D11): x += perturb * reach * (1 - (r/reach)^2) * n_rest, with n_rest the
+  // area-weighted vertex normal of the rest mesh and r the rest distance from the centre.
   s.position = s.rest;
+  if (p.perturb > 0) {
+    std::vector<Vec3d> normal(n, Vec3d{0, 0, 0});
+    for (const auto& t : mesh.triangles) {
+      const Vec3d &a = s.rest[t[0]], &b = s.rest[t[1]], &c = s.rest[t[2]];
+      const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const Vec3d cr = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+      for (int k = 0; k < 3; ++k)
+        for (int d = 0; d < 3; ++d) normal[t[k]][d] += cr[d];
+    }
+    for (size_t k = 0; k < n; ++k) {
+      const double len = std::sqrt(normal[k][0] * normal[k][0] + normal[k][1] * normal[k][1] + normal[k][2] * normal[k][2]);
+      const double r = dist(s.rest[k], s.center) / s.reach;
+      const double lift = len > 0 ? p.perturb * s.reach * (1 - r * r) / len : 0.0;
+      for (int d = 0; d < 3; ++d) s.position[k][d] += lift * normal[k][d];
+    }
+  }
   if (p.scene == Scene::Free) {
     for (Vec3d& x : s.position)
       for (int d = 0; d < 3; ++d) x[d] = s.center[d] + p.squeeze * (x[d] - s.center[d]);

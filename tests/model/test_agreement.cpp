@@ -77,7 +77,8 @@ TEST(Agreement, ForcesNormalsAndOneStepOnGridsAndMeshes) {
       }
       ls.sync();
       const auto alive = ls.ref->snapshot().vertex_alive;
-      EXPECT_LT(rel_diff(ls.ref->normals(), ls.fast->normals(), alive), 1e-5) << name;
+      // Float normals of thin triangles lose digits: ~1e-7 / sin(smallest angle).
+      EXPECT_LT(rel_diff(ls.ref->normals(), ls.fast->normals(), alive), 1e-4) << name;
       EXPECT_LT(rel_diff(ls.ref->forces(), ls.fast->forces(), alive), 1e-4) << name;
       ls.ref->step();
       ls.fast->step();

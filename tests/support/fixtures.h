@@ -52,6 +52,7 @@ inline Params still_params() {
   Params p;
   p.scene = Scene::Free;
   p.squeeze = 1.0;
+  p.perturb = 0;
   p.kappa = 0;
   p.bend = 0;
   p.gravity = 0;
