@@ -25,8 +25,9 @@ int main(int argc, char** argv) {
   auto* grid = run->add_option("--grid", o.grid, "N x N vertex grid on the unit square")->capture_default_str();
   run->add_option("--mesh", o.mesh, "triangle mesh to crumple (OBJ)")->excludes(grid);
   run->add_flag("--fixed-diagonals", o.fixed_diagonals, "grid: one diagonal direction everywhere");
-  run->add_option("--scene", p.scene, "sphere | free")
-      ->transform(choice<Scene>({{"sphere", Scene::Sphere}, {"free", Scene::Free}}));
+  run->add_option("--scene", p.scene, "sphere | free | hang (two top corners pinned; add --gravity)")
+      ->transform(choice<Scene>({{"sphere", Scene::Sphere}, {"free", Scene::Free}, {"hang", Scene::Hang}}));
+  run->add_option("--frame-dt", p.frame_dt, "seconds per frame (h = frame-dt / substeps)")->capture_default_str();
   run->add_option("--squeeze", p.squeeze, "free scene: initial scale about the centroid")->capture_default_str();
   run->add_option("--frames", o.frames, "frames of 1/60 s")->capture_default_str();
   run->add_option("--substeps", p.substeps, "steps per frame")->capture_default_str();

@@ -98,23 +98,34 @@ void FastSimulator::integrate() {
   const StepConstants c = step_constants();
   const int n = topo_.V.size();
   float corr[3] = {0, 0, 0};
+  auto pin = [&] {  // pinned vertices (hang scene) are fixed neighbours in every sweep
+    for (int k : scene_.pinned) topo_.V.g[k] = Float4{};
+  };
   if (params_.integrator == Integrator::Explicit) {
     par_.run(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
+    pin();
   } else {
+    pin();
     for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
       par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, c, b, e); });
       topo_.V.g.swap(topo_.V.g_next);
+      pin();
     }
     // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
     double drift[3];
     par_.sum3(n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_, c, b, e, out); }, drift);
     double mass = 0;
     for (int v = 0; v < n; ++v) mass += topo_.V.m[v];
-    for (int d = 0; d < 3; ++d) corr[d] = float(drift[d] / mass);
+    for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / mass) : 0.0f;
   }
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
   par_.run(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
+  for (int k : scene_.pinned) {
+    topo_.V.x[k] = float(scene_.position[k][0]), topo_.V.y[k] = float(scene_.position[k][1]);
+    topo_.V.z[k] = float(scene_.position[k][2]);
+    topo_.V.vx[k] = topo_.V.vy[k] = topo_.V.vz[k] = 0;
+  }
 }
 
 StepEvents FastSimulator::step() {

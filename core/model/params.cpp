@@ -38,7 +38,7 @@ std::string Params::validate() const {
   return {};
 }
 
-const char* to_string(Scene s) { return s == Scene::Sphere ? "sphere" : "free"; }
+const char* to_string(Scene s) { return s == Scene::Sphere ? "sphere" : s == Scene::Free ? "free" : "hang"; }
 const char* to_string(Integrator i) {
   return i == Integrator::Approx ? "approx" : i == Integrator::Explicit ? "explicit" : "implicit";
 }

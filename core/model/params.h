@@ -7,7 +7,7 @@
 
 namespace crumple {
 
-enum class Scene { Sphere, Free };                  ///< MODEL.md §8
+enum class Scene { Sphere, Free, Hang };            ///< MODEL.md §8; Hang: two corners pinned
 enum class Integrator { Approx, Explicit, Implicit };  ///< MODEL.md §3
 enum class RestoreForm { Exact, Paper };            ///< MODEL.md §7
 enum class BendingForm { Balanced, Paper };         ///< MODEL.md §6

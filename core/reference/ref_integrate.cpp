@@ -39,6 +39,7 @@ void ReferenceSimulator::integrate_approx(double h) {
     else
       guess[k] = V.v + h * g + (h * (f[k] - V.m * g) + h2 * jv[k]) / (V.m + 2 * h2 * ksum[k]);
   }
+  for (int k : scene_.pinned) guess[k].setZero();  // pinned vertices are fixed neighbours
   for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
     std::vector<V3> num(n, V3::Zero());
     for (size_t k = 0; k < n; ++k)
@@ -51,6 +52,7 @@ void ReferenceSimulator::integrate_approx(double h) {
     for (size_t k = 0; k < n; ++k)
       if (mesh_.verts[k].alive) next[k] = num[k] / (mesh_.verts[k].m + h2 * ksum[k]);
     guess.swap(next);
+    for (int k : scene_.pinned) guess[k].setZero();
   }
   // A finite number of sweeps leaves an error with a net momentum, which the exact implicit
   // step would not have (its matrix has zero row sums off the mass): remove it with a uniform
@@ -63,7 +65,8 @@ void ReferenceSimulator::integrate_approx(double h) {
     drift += V.m * (guess[k] - V.v) - h * f[k];
     mass += V.m;
   }
-  const V3 correction = drift / mass;
+  // (No correction with pinned vertices: the pins exert external forces.)
+  const V3 correction = scene_.pinned.empty() ? V3(drift / mass) : V3::Zero();
   for (size_t k = 0; k < n; ++k) {
     Vertex& V = mesh_.verts[k];
     if (!V.alive) continue;
@@ -125,6 +128,21 @@ void ReferenceSimulator::integrate_implicit(double h) {
     const V3 jv = K * (A.v - B.v);  // (df/dx v)_a
     b.segment<3>(3 * row[E.a]) += h * h * jv;
     b.segment<3>(3 * row[E.b]) -= h * h * jv;
+  }
+  // Pinned vertices: their rows and columns become the identity with dv = 0 (a fixed vertex).
+  if (!scene_.pinned.empty()) {
+    std::vector<char> fixed(3 * n, 0);
+    for (int k : scene_.pinned)
+      for (int d = 0; d < 3; ++d) fixed[3 * row[k] + d] = 1;
+    std::vector<Eigen::Triplet<double>> kept;
+    for (const auto& t : trip)
+      if (!fixed[t.row()] && !fixed[t.col()]) kept.push_back(t);
+    for (int r = 0; r < 3 * n; ++r)
+      if (fixed[r]) {
+        kept.emplace_back(r, r, 1.0);
+        b(r) = 0;
+      }
+    trip.swap(kept);
   }
   Eigen::SparseMatrix<double> M(3 * n, 3 * n);
   M.setFromTriplets(trip.begin(), trip.end());

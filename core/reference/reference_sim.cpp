@@ -41,6 +41,10 @@ StepEvents ReferenceSimulator::step() {
     case Integrator::Implicit: integrate_implicit(h); break;
   }
   time_ += h;
+  for (int k : scene_.pinned) {  // hang scene: pinned corners stay where they started
+    mesh_.verts[k].x = to_v3(scene_.position[k]);
+    mesh_.verts[k].v.setZero();
+  }
   apply_sphere();
   const StepEvents ev = adapt();
   ++steps_;

@@ -70,6 +70,16 @@ SceneSetup make_scene(const InputMesh& mesh, const Params& p) {
       for (int d = 0; d < 3; ++d) s.position[k][d] += lift * normal[k][d];
     }
   }
+  if (p.scene == Scene::Hang) {
+    // The two "top corners": the vertices farthest along y - x and y + x (on the unit-square
+    // grid, (0,1) and (1,1)); the lowest id wins a tie.
+    int left = 0, right = 0;
+    for (size_t k = 0; k < n; ++k) {
+      if (s.rest[k][1] - s.rest[k][0] > s.rest[left][1] - s.rest[left][0]) left = int(k);
+      if (s.rest[k][1] + s.rest[k][0] > s.rest[right][1] + s.rest[right][0]) right = int(k);
+    }
+    s.pinned = {left, right};
+  }
   if (p.scene == Scene::Free) {
     for (Vec3d& x : s.position)
       for (int d = 0; d < 3; ++d) x[d] = s.center[d] + p.squeeze * (x[d] - s.center[d]);

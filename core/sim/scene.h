@@ -22,6 +22,7 @@ struct SceneSetup {
   double radius_start = 0;       ///< R0 = sphere_start * reach
   double radius_end = 0;         ///< R1 = sphere_end * reach
   double shrink_time = 0;        ///< T
+  std::vector<int> pinned;       ///< vertices held at their initial position (hang scene)
 
   /// R(t): linear from R0 to R1 over T, then R1.
   double sphere_radius(double t) const;
