@@ -3,6 +3,7 @@
 // the reference backend. Mass and momentum bookkeeping is done in double and stored in float.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "fast/fast_sim.h"
 #include "fast/pass_timer.h"
@@ -54,9 +55,19 @@ StepEvents FastSimulator::adapt_apply() {
   StepEvents ev;
   ++pass_;
   std::vector<int> splits, restores;
-  for (int e = 0; e < int(decisions_.size()); ++e) {
+  const int n = int(decisions_.size());
+  for (int e = 0; e < n;) {
+    if (e + 8 <= n) {  // most decisions are 0: skip them eight at a time
+      std::uint64_t word;
+      std::memcpy(&word, &decisions_[e], 8);
+      if (word == 0) {
+        e += 8;
+        continue;
+      }
+    }
     if (decisions_[e] == 1) splits.push_back(e);
     if (decisions_[e] == 2) restores.push_back(e);
+    ++e;
   }
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
   std::vector<int> changed;  // triangles changed in this pass
