@@ -142,6 +142,18 @@ StepEvents FastSimulator::step() {
   return ev;
 }
 
+std::vector<std::string> FastSimulator::pass_names() const {
+  std::vector<std::string> names;
+  for (int k = 0; k < int(Pass::kCount); ++k) names.push_back(to_string(Pass(k)));
+  return names;
+}
+
+void FastSimulator::run_pass(const std::string& name) {
+  for (int k = 0; k < int(Pass::kCount); ++k)
+    if (name == to_string(Pass(k))) return run_pass(Pass(k));
+  throw std::invalid_argument("unknown pass '" + name + "'");
+}
+
 void FastSimulator::run_pass(Pass p) {
   const StepConstants c = step_constants();
   switch (p) {

@@ -57,6 +57,8 @@ class FastSimulator final : public Simulator {
 
   /// Runs one pass of a step on the current state (benchmarks time passes one by one).
   void run_pass(Pass p);
+  std::vector<std::string> pass_names() const override;
+  void run_pass(const std::string& name) override;
   /// Seconds spent in each pass since construction (steps only).
   const std::array<double, int(Pass::kCount)>& pass_seconds() const { return pass_seconds_; }
   const Topology& topology() const { return topo_; }

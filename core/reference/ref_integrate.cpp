@@ -15,8 +15,15 @@ namespace crumple::ref {
 //    sum_e kappa_e): the same row solved with its diagonal bounded by Gershgorin (neighbours
 //    moving against it), external acceleration g exact. Equal to the explicit guess for soft
 //    springs; stable for any h and any K. K -> infinity converges to the linear implicit step.
-void ReferenceSimulator::integrate_approx(double h) {
-  const std::vector<V3> f = total_forces();
+void ReferenceSimulator::integrate(double h, const std::vector<V3>& f) {
+  switch (params_.integrator) {
+    case Integrator::Approx: integrate_approx(h, f); break;
+    case Integrator::Explicit: integrate_explicit(h, f); break;
+    case Integrator::Implicit: integrate_implicit(h, f); break;
+  }
+}
+
+void ReferenceSimulator::integrate_approx(double h, const std::vector<V3>& f) {
   const size_t n = mesh_.verts.size();
   const double h2 = h * h;
   const V3 g(0, 0, -params_.gravity);
@@ -76,8 +83,7 @@ void ReferenceSimulator::integrate_approx(double h) {
 }
 
 // Symplectic Euler: v' = v + h f / m, x' = x + h v'.
-void ReferenceSimulator::integrate_explicit(double h) {
-  const std::vector<V3> f = total_forces();
+void ReferenceSimulator::integrate_explicit(double h, const std::vector<V3>& f) {
   for (size_t k = 0; k < mesh_.verts.size(); ++k) {
     Vertex& V = mesh_.verts[k];
     if (!V.alive) continue;
@@ -89,8 +95,7 @@ void ReferenceSimulator::integrate_explicit(double h) {
 // Baraff-Witkin implicit Euler, (M - h^2 df/dx - h df/dv) dv = h (f + h df/dx v), with the true
 // spring Jacobian -kappa_e [u u^T + (1 - l0/lt)(I - u u^T)] (the second term dropped when
 // compressed so the matrix stays definite); bending is explicit. Solved by Eigen's CG.
-void ReferenceSimulator::integrate_implicit(double h) {
-  const std::vector<V3> f = total_forces();
+void ReferenceSimulator::integrate_implicit(double h, const std::vector<V3>& f) {
   const int nv = int(mesh_.verts.size());
   std::vector<int> row(nv, -1);
   int n = 0;

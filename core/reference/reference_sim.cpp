@@ -35,11 +35,7 @@ ReferenceSimulator::ReferenceSimulator(const InputMesh& input, const Params& par
 
 StepEvents ReferenceSimulator::step() {
   const double h = params_.h();
-  switch (params_.integrator) {
-    case Integrator::Approx: integrate_approx(h); break;
-    case Integrator::Explicit: integrate_explicit(h); break;
-    case Integrator::Implicit: integrate_implicit(h); break;
-  }
+  integrate(h, total_forces());
   time_ += h;
   for (int k : scene_.pinned) {  // hang scene: pinned corners stay where they started
     mesh_.verts[k].x = to_v3(scene_.position[k]);
@@ -49,6 +45,32 @@ StepEvents ReferenceSimulator::step() {
   const StepEvents ev = adapt();
   ++steps_;
   return ev;
+}
+
+std::vector<std::string> ReferenceSimulator::pass_names() const {
+  return {"normals", "springs", "bending", "integrate", "adapt_test", "topology_apply"};
+}
+
+void ReferenceSimulator::run_pass(const std::string& name) {
+  if (pass_normals_.size() != mesh_.verts.size()) pass_normals_ = vertex_normals();
+  if (pass_forces_.size() != mesh_.verts.size()) pass_forces_.assign(mesh_.verts.size(), V3::Zero());
+  if (name == "normals") {
+    pass_normals_ = vertex_normals();
+  } else if (name == "springs") {
+    std::fill(pass_forces_.begin(), pass_forces_.end(), V3::Zero());
+    add_spring_forces(pass_forces_);
+  } else if (name == "bending") {
+    add_bending_forces(pass_normals_, pass_forces_);
+  } else if (name == "integrate") {  // the update from given forces (sphere included)
+    integrate(params_.h(), pass_forces_);
+    apply_sphere();
+  } else if (name == "adapt_test") {
+    (void)decide();
+  } else if (name == "topology_apply") {  // the whole adapt pass: test and apply
+    adapt();
+  } else {
+    throw std::invalid_argument("unknown pass '" + name + "'");
+  }
 }
 
 void ReferenceSimulator::apply_sphere() {

@@ -33,6 +33,8 @@ class ReferenceSimulator final : public Simulator {
   std::vector<Vec3d> forces() const override;
   std::vector<Decision> decide() const override;
   bool split(int e) override;
+  std::vector<std::string> pass_names() const override;
+  void run_pass(const std::string& name) override;
   bool restore(int e) override;
   void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;
   void set_masses(const std::vector<double>& m) override;
@@ -46,9 +48,10 @@ class ReferenceSimulator final : public Simulator {
   void add_bending_forces(const std::vector<V3>& n, std::vector<V3>& f) const;
   std::vector<V3> total_forces() const;
   // ref_integrate.cpp
-  void integrate_approx(double h);
-  void integrate_explicit(double h);
-  void integrate_implicit(double h);
+  void integrate(double h, const std::vector<V3>& f);
+  void integrate_approx(double h, const std::vector<V3>& f);
+  void integrate_explicit(double h, const std::vector<V3>& f);
+  void integrate_implicit(double h, const std::vector<V3>& f);
   void apply_sphere();
   // ref_adapt.cpp
   double break_probability(int e, const std::vector<V3>& n) const;
@@ -64,7 +67,8 @@ class ReferenceSimulator final : public Simulator {
   double time_ = 0;
   std::uint64_t steps_ = 0;
   std::vector<std::uint64_t> tri_stamp_;  ///< pass number that last changed each triangle
-  std::uint64_t pass_ = 0;                ///< topology passes so far (1-based stamp)
+  std::uint64_t pass_ = 0;                ///< topology passes so far
+  std::vector<V3> pass_normals_, pass_forces_;  ///< run_pass() state between passes (1-based stamp)
 };
 
 }  // namespace crumple::ref

@@ -102,6 +102,12 @@ class Simulator {
   /// otherwise a description of the first inconsistency.
   virtual std::string check_topology() const = 0;
 
+  // --- passes, for per-pass benchmarks ---
+  /// The passes of a step that run_pass() can run alone, in step order.
+  virtual std::vector<std::string> pass_names() const = 0;
+  /// Runs one pass on the current state (it may change the state, as in a step).
+  virtual void run_pass(const std::string& name) = 0;
+
   // --- hooks for tests: each runs one part of the model on the current state ---
   /// Vertex normals (area-weighted, normalized), per vertex id.
   virtual std::vector<Vec3d> normals() const = 0;
