@@ -1,0 +1,184 @@
+// BM_Frame/<backend>/<threads>/<N>: one whole 1/60 s frame (params.substeps steps) of the default
+// sphere crumple (crumple::Params defaults) on make_grid(N), for every registered backend.
+//
+// Preparation (outside timing, once per benchmark and cached for the process): the sheet is
+// simulated into the crumple, kPrepFraction of sphere_time, i.e. to a state where edges split
+// and restore every frame; then a dry run of the warm-up and timed frames on a clone records
+// the mean live vertices/edges and the splits/restores of the timed frames.
+//
+// Comparable work per iteration, and why manual timing:
+//   * Every iteration starts from the same prepared state: sim->clone() of the cached state,
+//     made outside the timed region, into a fresh object, and destroyed outside it. The model
+//     is deterministic (counter-based random stream keyed by edge id), so each iteration
+//     simulates the very same frames; the `mismatch` counter counts iterations whose
+//     splits/restores differ from the dry run (0 expected) and would reveal otherwise.
+//   * One untimed warm-up frame runs on the clone before the timed frames. Measured here: the
+//     first frame after a clone cost 1.4-2x a frame of the continuing simulation (reference
+//     backend, N = 256 and 512, e.g. 220-250 ms against 125-135 ms at N = 512; the fast
+//     backend showed the same before its clones kept reserved room), because a clone's arrays
+//     are allocated to their exact size, so the first splits reallocate (copy, and fault in)
+//     every growing array, which a running simulation amortizes; cold caches and sleeping TBB
+//     workers add to it. From the second frame on, a clone runs at the continuing
+//     simulation's speed, which is what a frame of a crumpling sheet costs.
+//   * The timed region holds only sim->step() calls: no totals() (an O(N) pass run_frame
+//     adds), no clone, no destruction. It is measured with steady_clock and reported with
+//     SetIterationTime (UseManualTime). PauseTiming/ResumeTiming would need the same untimed
+//     clone + warm-up anyway, with more overhead inside the measurement: each pair reads the
+//     process CPU clock (a system call, ~1 us) inside the timed interval, a few per cent of
+//     the fast backend's sub-100 us frames at N = 32; manual timing costs two vDSO clock
+//     reads (~20 ns) per batch.
+//   * A batch of frames_per_iteration(N) frames is timed per iteration (8 at N <= 64, down to
+//     1 at N >= 512) and divided, so each iteration's time is the mean frame time of a fixed
+//     stretch of the crumple; the batch is fixed per N so that every backend, thread count
+//     and revision times the same frames.
+//   * The reported cpu_time is not meaningful (it includes the untimed clone and warm-up, on
+//     the main thread only); use real_time, which is the manual time.
+// Threads: tbb::global_control(max_allowed_parallelism, T) for the whole benchmark function,
+// preparation included, and T is passed to make_simulator. The prepared state is cached per
+// (backend, T, N): the thread count is fixed when a simulator is made and clone() keeps it, and
+// the interface cannot change it afterwards, so one prepared object cannot serve both counts.
+#include <oneapi/tbb/global_control.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+
+#include "bench_common.h"
+#include "mesh/input_mesh.h"
+#include "sim/backends.h"
+#include "sim/run.h"
+#include "sim/scene.h"
+
+namespace crumple::bench {
+namespace {
+
+/// Where the timed frames start: this fraction of params.sphere_time (1.2 s with the defaults,
+/// frame 72), well into the crumple: with the defaults of commit 95e4564 (phi 0.75, floor 0.5)
+/// every N from 32 to 1024 splits and restores edges every frame there (e.g. N = 256: ~2500
+/// splits and ~1200 restores per frame; N = 32: ~40 and ~12) and stays stable through 1.4 s.
+/// (With the earlier defaults, phi 0.5 and floor 0.25, N >= 128 went unstable before 1.2 s;
+/// an unstable prepared state skips the benchmark with the reason instead of timing it.)
+constexpr double kPrepFraction = 0.6;
+
+/// Largest N at which the reference backend is benchmarked: a frame must cost under ~2 s. At the
+/// prepared point a reference frame cost ~0.4 s at N = 512 and 2.0-2.2 s at N = 1024 (frames
+/// 70-74, `crumple run --grid 1024`, on the 2-core test machine while it was busy), and its
+/// preparation alone takes ~1.5 min, so N = 1024 is left to the fast backend.
+constexpr int kReferenceMaxN = 512;
+
+struct Prepared {
+  std::unique_ptr<Simulator> sim;  ///< state at the prepared point
+  int substeps = 1;
+  double vertices = 0, edges = 0;  ///< mean live counts at the end of each dry-run frame
+  long splits = 0, restores = 0;   ///< events of the whole dry-run batch
+  std::string error;               ///< non-empty: the benchmark is skipped with this message
+};
+
+Prepared make_prepared(const std::string& backend, int threads, int n) {
+  Prepared p;
+  const Params params;  // the defaults: sphere scene
+  const InputMesh mesh = make_grid(n);
+  const double size = make_scene(mesh, params).size;
+  p.substeps = params.substeps;
+  p.sim = make_simulator(backend, mesh, params, threads);
+  const int prep_frames = int(std::lround(kPrepFraction * params.sphere_time / params.frame_dt));
+  for (int f = 1; f <= prep_frames; ++f) {
+    const FrameStats s = run_frame(*p.sim, params.substeps, f);
+    if (std::string why = instability(s.totals, size); !why.empty()) {
+      p.error = "unstable while preparing, frame " + std::to_string(f) + ": " + why;
+      return p;
+    }
+  }
+  const int k = frames_per_iteration(n);
+  std::unique_ptr<Simulator> dry = p.sim->clone();
+  for (int f = 0; f <= k; ++f) {  // f = 0: the untimed warm-up frame
+    const FrameStats s = run_frame(*dry, params.substeps, prep_frames + 1 + f);
+    if (std::string why = instability(s.totals, size); !why.empty()) {
+      p.error = "unstable in the timed frames, frame " + std::to_string(prep_frames + 1 + f) + ": " + why;
+      return p;
+    }
+    if (f == 0) continue;
+    p.vertices += double(s.totals.vertices) / k;
+    p.edges += double(s.totals.edges) / k;
+    p.splits += s.splits;
+    p.restores += s.restores;
+  }
+  if (p.splits == 0 && p.restores == 0)
+    p.error = "no split or restore in the timed frames: not the crumple this benchmark is about";
+  return p;
+}
+
+Prepared& prepared(const std::string& backend, int threads, int n) {
+  static std::map<std::tuple<std::string, int, int>, Prepared> cache;
+  const auto key = std::make_tuple(backend, threads, n);
+  auto it = cache.find(key);
+  if (it == cache.end()) {
+    // Progress on stderr: with random interleaving Google Benchmark prints a benchmark's rows
+    // only after its last repetition, and preparing the large sheets takes minutes.
+    const Clock::time_point t0 = Clock::now();
+    it = cache.emplace(key, make_prepared(backend, threads, n)).first;
+    std::fprintf(stderr, "crumple_bench: prepared %s, %d thread(s), N = %d in %.1f s%s%s\n", backend.c_str(),
+                 threads, n, seconds_between(t0, Clock::now()), it->second.error.empty() ? "" : ": ",
+                 it->second.error.c_str());
+  }
+  return it->second;
+}
+
+void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  Prepared& p = prepared(backend, threads, n);
+  if (!p.error.empty()) {
+    state.SkipWithError(p.error.c_str());
+    return;
+  }
+  const int k = frames_per_iteration(n);
+  FrameTally tally;
+  long mismatch = 0;
+  for (auto _ : state) {
+    std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
+    for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
+    long splits = 0, restores = 0;
+    const Clock::time_point t0 = Clock::now();
+    for (int f = 0; f < k; ++f)
+      for (int s = 0; s < p.substeps; ++s) {
+        const StepEvents ev = sim->step();
+        splits += ev.splits;
+        restores += ev.restores;
+      }
+    const Clock::time_point t1 = Clock::now();
+    tally.add_batch(state, seconds_between(t0, t1), k);
+    tally.splits += splits;
+    tally.restores += restores;
+    mismatch += (splits != p.splits || restores != p.restores);
+    // sim is destroyed here, outside the timed interval
+  }
+  tally.set_counters(state, p.vertices, p.edges);
+  state.counters["mismatch"] = double(mismatch);
+}
+
+void register_frame_benchmarks() {
+  for (const std::string& backend : backend_names()) {
+    const bool reference = backend == "reference";
+    for (int threads : {1, 2}) {
+      if (reference && threads != 1) continue;  // the reference is serial
+      for (int n : kSizes) {
+        if (reference && n > kReferenceMaxN) continue;
+        const std::string name =
+            "BM_Frame/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n)
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
+      }
+    }
+  }
+  benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
+}
+
+}  // namespace
+
+CRUMPLE_BENCH_REGISTRAR(register_frame_benchmarks);
+
+}  // namespace crumple::bench

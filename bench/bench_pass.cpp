@@ -1,0 +1,86 @@
+// BM_Pass/<pass>/<backend>/<threads>/<N>: one pass of one step, alone, at the prepared crumple
+// state of BM_Frame (kPrepFraction of sphere_time into the default sphere scene), so each step
+// of the speed-up is visible per pass: the reference, the fast kernels without SIMD (a build
+// with -DCRUMPLE_DISABLE_SIMD=ON, labelled fast-nosimd), with SIMD on one thread, on two.
+//
+// Each iteration restores the prepared state (clone and one warm-up step, untimed), runs the
+// step's earlier passes untimed so the timed pass sees the inputs it has inside a step, and times that pass alone
+// with steady_clock (manual time). Passes and their order come from Simulator::pass_names():
+// the reference computes springs and bending in separate loops; the fast backend fuses them in
+// one vectorized edge pass (edge_forces) followed by a per-vertex gather. `topology_apply` is the
+// whole adapt pass (its test and the serial splits and restores); `adapt_test` the test alone.
+#include <oneapi/tbb/global_control.h>
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+
+#include "bench_common.h"
+#include "mesh/input_mesh.h"
+#include "sim/backends.h"
+
+namespace crumple::bench {
+namespace {
+
+constexpr double kPrepFraction = 0.6;     ///< same prepared point as BM_Frame
+constexpr std::array<int, 2> kPassSizes{128, 256};
+
+std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, int n) {
+  static std::map<std::tuple<std::string, int, int>, std::unique_ptr<Simulator>> cache;
+  auto& sim = cache[std::make_tuple(backend, threads, n)];
+  if (!sim) {
+    const Params params;
+    sim = make_simulator(backend, make_grid(n), params, threads);
+    const int steps = int(std::lround(kPrepFraction * params.sphere_time / params.h()));
+    for (int s = 0; s < steps; ++s) sim->step();
+  }
+  return sim;
+}
+
+void BM_Pass(benchmark::State& state, const std::string& backend, int threads, int n, const std::string& pass) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  const std::unique_ptr<Simulator>& base = prepared(backend, threads, n);
+  const std::vector<std::string> order = base->pass_names();
+  double seconds = 0;
+  for (auto _ : state) {
+    std::unique_ptr<Simulator> sim = base->clone();
+    sim->step();  // untimed warm-up step: a fresh clone's first splits reallocate (bench_frame.cpp)
+    for (const std::string& earlier : order) {  // untimed: the inputs this pass sees in a step
+      if (earlier == pass) break;
+      if (earlier != "topology_apply") sim->run_pass(earlier);
+    }
+    const Clock::time_point t0 = Clock::now();
+    sim->run_pass(pass);
+    const double dt = seconds_between(t0, Clock::now());
+    state.SetIterationTime(dt);
+    seconds += dt;
+  }
+  state.counters["ms_per_pass"] = state.iterations() ? 1e3 * seconds / double(state.iterations()) : 0.0;
+  state.counters["vertices"] = base->totals().vertices;
+}
+
+void register_pass_benchmarks() {
+  for (const std::string& backend : backend_names()) {
+    const bool reference = backend == "reference";
+    const std::unique_ptr<Simulator> probe = make_simulator(backend, make_grid(4), Params{}, 1);
+    for (const std::string& pass : probe->pass_names())
+      for (int threads : {1, 2}) {
+        if (reference && threads != 1) continue;
+        for (int n : kPassSizes) {
+          const std::string name = "BM_Pass/" + pass + "/" + bench_label(backend) + "/" + std::to_string(threads) +
+                                   "/" + std::to_string(n);
+          benchmark::RegisterBenchmark(name.c_str(), BM_Pass, backend, threads, n, pass)
+              ->Unit(benchmark::kMillisecond)
+              ->UseManualTime();
+        }
+      }
+  }
+}
+
+}  // namespace
+
+CRUMPLE_BENCH_REGISTRAR(register_pass_benchmarks);
+
+}  // namespace crumple::bench

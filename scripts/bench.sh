@@ -1,0 +1,121 @@
+#!/usr/bin/env bash
+# Builds crumple's benchmark harness (Release: -O3 -march=native) into build-bench/, runs it on
+# every core and writes, under results/<machine-tag>/ (e.g. results/amd-epyc_avx512/):
+#   frame.json      Google Benchmark JSON (every repetition, plus aggregates)
+#   run.json        the machine and how the run was made
+#   REPORT.md       machine, command, table, largest sheet at 60/30 fps, charts
+#   frame_time.png  frame time against vertex count; speedup.png; passes.png (if BM_Pass/ ran)
+# and copies frame_time.png to results/frame_time.png (the README's chart).
+#
+# Usage: scripts/bench.sh [--quick] [--out DIR] [-- extra crumple_bench flags]
+#   --quick   N <= 256 and fewer, shorter repetitions (about two minutes); writes to
+#             results/<machine-tag>/quick/ and leaves results/frame_time.png alone
+#   --out DIR write the results there instead (results/frame_time.png is then not touched)
+# Environment: CRUMPLE_BENCH_BUILD (build folder, default build-bench), CRUMPLE_BENCH_REPS,
+#   CRUMPLE_BENCH_MIN_TIME (seconds, a plain number) override the mode's defaults.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+py=/usr/bin/python3  # the python3 first on PATH may lack matplotlib/scipy
+
+quick=0
+out=""
+extra=()
+while (($#)); do
+  case "$1" in
+    --quick) quick=1 ;;
+    --out) out=$2; shift ;;
+    --) shift; extra=("$@"); break ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    *) echo "bench.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
+  esac
+  shift
+done
+
+"$root/scripts/install_deps.sh"
+
+build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
+echo "bench.sh: configuring and building crumple_bench (Release) in $build"
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCRUMPLE_BUILD_BENCH=ON \
+      -DCRUMPLE_BUILD_TESTS=OFF > "$build.cmake.log" 2>&1 || { cat "$build.cmake.log"; exit 1; }
+cmake --build "$build" -j "$(nproc)" --target crumple_bench
+bin=$build/bench/crumple_bench
+# The same kernels without vectorization (CRUMPLE_DISABLE_SIMD): its fast backend is labelled
+# fast-nosimd, so the report shows scalar -> SIMD -> two threads from one run.
+nosimd_build=${build}-nosimd
+echo "bench.sh: building the no-SIMD variant in $nosimd_build"
+cmake -S "$root" -B "$nosimd_build" -DCMAKE_BUILD_TYPE=Release -DCRUMPLE_BUILD_BENCH=ON \
+      -DCRUMPLE_BUILD_TESTS=OFF -DCRUMPLE_DISABLE_SIMD=ON > "$nosimd_build.cmake.log" 2>&1 \
+  || { cat "$nosimd_build.cmake.log"; exit 1; }
+cmake --build "$nosimd_build" -j "$(nproc)" --target crumple_bench
+nosimd_bin=$nosimd_build/bench/crumple_bench
+
+tag=$("$py" "$root/scripts/machine_info.py" --tag)
+if ((quick)); then
+  reps=${CRUMPLE_BENCH_REPS:-3}
+  min_time=${CRUMPLE_BENCH_MIN_TIME:-0.2}
+  # Every benchmark at N <= 256 (per-pass ones too, once they exist).
+  filter='/(32|64|128|256)/'
+  dest=${out:-$root/results/$tag/quick}
+else
+  reps=${CRUMPLE_BENCH_REPS:-10}
+  min_time=${CRUMPLE_BENCH_MIN_TIME:-0.5}
+  filter='.'
+  dest=${out:-$root/results/$tag}
+fi
+mkdir -p "$dest"
+json=$dest/frame.json
+
+# Every core: the benchmarks set their own TBB thread limit (1 or 2); taskset only makes sure
+# the process may use all of them.
+cmd=(taskset -c "0-$(($(nproc) - 1))" "$bin"
+     --benchmark_filter="$filter"
+     --benchmark_repetitions="$reps"
+     --benchmark_enable_random_interleaving=true
+     --benchmark_min_time="$min_time"
+     --benchmark_out="$json" --benchmark_out_format=json
+     "${extra[@]}")
+echo "bench.sh: ${cmd[*]}"
+start=$(date +%s)
+"${cmd[@]}"
+# The no-SIMD fast backend on one thread (its gain is a per-core question), N <= 512.
+nosimd_json=$dest/nosimd.json
+nosimd_cmd=(taskset -c "0-$(($(nproc) - 1))" "$nosimd_bin"
+     --benchmark_filter="fast-nosimd/1/(32|64|128|256|512)/"
+     --benchmark_repetitions="$reps"
+     --benchmark_enable_random_interleaving=true
+     --benchmark_min_time="$min_time"
+     --benchmark_out="$nosimd_json" --benchmark_out_format=json
+     "${extra[@]}")
+if ((quick)); then nosimd_cmd[2]="--benchmark_filter=fast-nosimd/1/(32|64|128|256)/"; fi
+echo "bench.sh: ${nosimd_cmd[*]}"
+"${nosimd_cmd[@]}"
+"$py" - "$json" "$nosimd_json" <<'PY'
+import json, sys
+main, extra = sys.argv[1:]
+a = json.load(open(main))
+a["benchmarks"] += json.load(open(extra))["benchmarks"]
+json.dump(a, open(main, "w"), indent=1)
+PY
+rm -f "$nosimd_json"
+elapsed=$(($(date +%s) - start))
+
+"$py" "$root/scripts/machine_info.py" --json > "$dest/machine.json"
+"$py" - "$dest/run.json" "$dest/machine.json" "$elapsed" "$quick" "$reps" "$min_time" "$filter" \
+      "$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)" "${cmd[*]}" <<'PY'
+import json, sys, datetime
+out, machine, elapsed, quick, reps, min_time, flt, rev, cmd = sys.argv[1:]
+with open(machine) as f:
+    m = json.load(f)
+json.dump({"machine": m, "mode": "quick" if quick == "1" else "full",
+           "command": "scripts/bench.sh" + (" --quick" if quick == "1" else ""),
+           "benchmark_command": cmd, "repetitions": int(reps), "min_time": float(min_time),
+           "filter": flt, "random_interleaving": True, "git": rev, "seconds": int(elapsed),
+           "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds")},
+          open(out, "w"), indent=2)
+PY
+rm -f "$dest/machine.json"
+
+headline=()
+if ((!quick)) && [ -z "$out" ]; then headline=(--headline "$root/results/frame_time.png"); fi
+"$py" "$root/scripts/bench_report.py" "$json" --run "$dest/run.json" --out "$dest" "${headline[@]}"
+echo "bench.sh: done in ${elapsed}s of benchmarking; results in ${dest#$root/}/"

@@ -1,0 +1,437 @@
+#!/usr/bin/python3
+"""Charts and REPORT.md from a crumple_bench Google Benchmark JSON (scripts/bench.sh runs it).
+
+Usage: bench_report.py FRAME_JSON [--run RUN_JSON] [--out DIR] [--headline PNG]
+
+Reads every repetition of every benchmark (run_type "iteration"; the aggregates Google Benchmark
+adds are recomputed here from the repetitions), and writes to DIR (default: the JSON's folder):
+  frame_time.png  median frame time against live vertex count, log-log, one line per
+                  backend/threads, with the 60 fps (16.7 ms) and 30 fps (33.3 ms) budgets
+  speedup.png     speed-up of each step reference -> <backend> 1 thread -> 2 threads ... per N
+                  (drawn when at least two crumple configurations exist)
+  passes.png      per-pass breakdown, only when BM_Pass/<pass>/<backend>/<threads>/<N> exist
+  REPORT.md       machine, how it was run, table, largest sheet within 60/30 fps, the charts
+--headline also copies frame_time.png there (results/frame_time.png, shown by the README).
+"""
+import argparse
+import json
+import math
+import os
+import re
+import shutil
+import statistics
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
+BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
+PEERS = {"bullet"}  # different methods: charted, never part of the speed-up chain
+
+
+class Bench:
+    """Every repetition of one benchmark."""
+
+    def __init__(self, name):
+        self.name = name
+        self.times = []     # ms per frame, one per repetition
+        self.counters = {}  # counter -> values, one per repetition
+        self.errors = []
+
+    def median(self):
+        return statistics.median(self.times)
+
+    def quartiles(self):
+        if len(self.times) < 2:
+            return self.times[0], self.times[0]
+        q = statistics.quantiles(self.times, n=4, method="inclusive")
+        return q[0], q[2]
+
+    def cv(self):
+        """Coefficient of variation in per cent (sample standard deviation / mean)."""
+        if len(self.times) < 2:
+            return float("nan")
+        return 100.0 * statistics.stdev(self.times) / statistics.mean(self.times)
+
+    def counter(self, key):
+        vals = [v for v in self.counters.get(key, []) if isinstance(v, (int, float)) and math.isfinite(v)]
+        return statistics.median(vals) if vals else float("nan")
+
+
+def load(path):
+    with open(path) as f:
+        data = json.load(f)
+    benches = {}
+    for b in data.get("benchmarks", []):
+        if b.get("run_type", "iteration") != "iteration":
+            continue
+        name = b.get("run_name", b["name"])
+        bench = benches.setdefault(name, Bench(name))
+        if b.get("error_occurred") or b.get("skipped"):
+            bench.errors.append(b.get("error_message") or b.get("skip_message") or "skipped")
+            continue
+        bench.times.append(b["real_time"] * TO_MS.get(b.get("time_unit", "ns"), 1e-6))
+        for k, v in b.items():
+            if k not in ("real_time", "cpu_time", "iterations", "repetitions", "repetition_index",
+                         "threads", "family_index", "per_family_instance_index") and isinstance(v, (int, float)):
+                bench.counters.setdefault(k, []).append(v)
+    return data.get("context", {}), benches
+
+
+def config_key(backend, threads):
+    return (backend, int(threads))
+
+
+def config_label(backend, threads, context):
+    t = "thread" if threads == 1 else "threads"
+    if backend == "bullet":
+        pit = context.get("bullet_piterations", "?")
+        return f"Bullet soft body (PBD, piterations={pit}), {threads} {t}"
+    return f"{backend}, {threads} {t}"
+
+
+def order_configs(keys):
+    """The speed-up chain's order: reference, then builds without SIMD (labels containing
+    "nosimd", e.g. fast-nosimd from a -DCRUMPLE_DISABLE_SIMD=ON build), then the other crumple
+    backends by name, peers (Bullet) last; thread counts ascending within a backend."""
+    def rank(k):
+        backend, threads = k
+        group = 3 if backend in PEERS else 0 if backend == "reference" else 1 if "nosimd" in backend else 2
+        return (group, backend, threads)
+    return sorted(keys, key=rank)
+
+
+def frame_series(benches):
+    """{(backend, threads): {n: Bench}} for the BM_Frame benchmarks that produced times."""
+    series = {}
+    for name, b in benches.items():
+        m = FRAME.match(name)
+        if m and b.times:
+            series.setdefault(config_key(m["backend"], m["threads"]), {})[int(m["n"])] = b
+    return series
+
+
+def fmt_ms(ms):
+    return f"{ms:.3g}" if ms < 100 else f"{ms:.0f}"
+
+
+def chart_frame_time(series, context, machine, path):
+    fig, ax = plt.subplots(figsize=(9, 6))
+    styles = {}
+    markers = "osD^v<>p*h"
+    annotated = None
+    for i, key in enumerate(order_configs(series)):
+        backend, threads = key
+        pts = sorted(series[key].items())
+        xs = [b.counter("vertices") if math.isfinite(b.counter("vertices")) else n * n for n, b in pts]
+        ys = [b.median() for _, b in pts]
+        lo = [y - b.quartiles()[0] for (_, b), y in zip(pts, ys)]
+        hi = [b.quartiles()[1] - y for (_, b), y in zip(pts, ys)]
+        peer = backend in PEERS
+        line = ax.errorbar(xs, ys, yerr=[lo, hi], marker=markers[i % len(markers)], markersize=5,
+                           capsize=3, linestyle="--" if peer else "-", linewidth=1.6,
+                           label=config_label(backend, threads, context))
+        styles[key] = line
+        if annotated is None or len(pts) > len(series[annotated]):
+            annotated = key
+    if annotated is not None:  # mark the sizes once, at the configuration with most points
+        for n, b in sorted(series[annotated].items()):
+            v = b.counter("vertices")
+            ax.annotate(f"N={n}", (v if math.isfinite(v) else n * n, 0.015), xycoords=("data", "axes fraction"),
+                        ha="center", fontsize=7, color="0.35")
+            ax.axvline(v if math.isfinite(v) else n * n, color="0.85", linewidth=0.8, zorder=0)
+    for (fps, ms), style in zip(BUDGETS, [":", "-."]):
+        ax.axhline(ms, color="0.3", linestyle=style, linewidth=1.2, label=f"{fps} fps budget ({ms:.1f} ms)")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("live vertices at the timed frames (crumple: N x N grid plus split vertices; Bullet: N x N)")
+    ax.set_ylabel("time per 1/60 s frame [ms]  (median; bars: quartiles)")
+    ax.set_title(f"crumple: one frame of the sphere crumple\n{machine}", fontsize=11)
+    ax.grid(True, which="major", alpha=0.35)
+    ax.grid(True, which="minor", alpha=0.12)
+    ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def speedup_chain(series):
+    """reference/1, then each other crumple backend's thread counts ascending."""
+    keys = [k for k in order_configs(series) if k[0] not in PEERS]
+    return keys if len(keys) >= 2 else []
+
+
+def speedup_steps(series):
+    chain = speedup_chain(series)
+    steps = list(zip(chain, chain[1:]))
+    if len(chain) > 2:
+        steps.append((chain[0], chain[-1]))  # the whole way
+    sizes = sorted(set().union(*(series[k].keys() for k in chain))) if chain else []
+    table = []  # (step, n, speed-up)
+    for a, b in steps:
+        for n in sizes:
+            if n in series[a] and n in series[b]:
+                table.append(((a, b), n, series[a][n].median() / series[b][n].median()))
+    return chain, steps, sizes, table
+
+
+def short(key):
+    backend, threads = key
+    return f"{backend} {threads}t"
+
+
+def chart_speedup(series, machine, path):
+    chain, steps, sizes, table = speedup_steps(series)
+    if not table:
+        return False
+    fig, ax = plt.subplots(figsize=(9, 5))
+    width = 0.8 / len(steps)
+    for i, step in enumerate(steps):
+        vals = {n: s for (st, n, s) in table if st == step}
+        xs = [j + (i - (len(steps) - 1) / 2) * width for j, n in enumerate(sizes) if n in vals]
+        ys = [vals[n] for n in sizes if n in vals]
+        whole = len(chain) > 2 and i == len(steps) - 1
+        bars = ax.bar(xs, ys, width * 0.95, label=f"{short(step[0])} -> {short(step[1])}" + (" (whole way)" if whole else ""),
+                      hatch="//" if whole else None, alpha=0.85)
+        for bar, y in zip(bars, ys):
+            ax.text(bar.get_x() + bar.get_width() / 2, y, f"{y:.2f}x" if y < 10 else f"{y:.0f}x",
+                    ha="center", va="bottom", fontsize=7)
+    ax.axhline(1.0, color="0.2", linewidth=1)
+    ax.set_xticks(range(len(sizes)))
+    ax.set_xticklabels([f"N={n}" for n in sizes])
+    ax.set_ylabel("speed-up (median frame time before / after)")
+    ax.set_title(f"crumple: speed-up of each step, per sheet size\n{machine}", fontsize=11)
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return True
+
+
+def pass_series(benches):
+    """{(backend, threads): {n: {pass: median ms}}} for BM_Pass benchmarks."""
+    out = {}
+    for name, b in benches.items():
+        m = PASS.match(name)
+        if m and b.times:
+            out.setdefault(config_key(m["backend"], m["threads"]), {}).setdefault(int(m["n"]), {})[m["pass"]] = b.median()
+    return out
+
+
+def chart_passes(passes, machine, path):
+    if not passes:
+        return False
+    keys = order_configs(passes)
+    names = sorted({p for cfg in passes.values() for per_n in cfg.values() for p in per_n})
+    fig, axes = plt.subplots(1, len(keys), figsize=(max(6, 4.5 * len(keys)), 5), squeeze=False, sharey=True)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for ax, key in zip(axes[0], keys):
+        sizes = sorted(passes[key])
+        bottom = [0.0] * len(sizes)
+        for i, p in enumerate(names):
+            totals = [sum(passes[key][n].values()) for n in sizes]
+            share = [100.0 * passes[key][n].get(p, 0.0) / t if t > 0 else 0 for n, t in zip(sizes, totals)]
+            ax.bar(range(len(sizes)), share, bottom=bottom, color=colors[i % len(colors)], label=p)
+            bottom = [b + s for b, s in zip(bottom, share)]
+        for j, n in enumerate(sizes):
+            ax.text(j, 101, f"{fmt_ms(sum(passes[key][n].values()))} ms", ha="center", fontsize=7)
+        ax.set_xticks(range(len(sizes)))
+        ax.set_xticklabels([f"N={n}" for n in sizes], fontsize=8)
+        ax.set_title(short(key), fontsize=10)
+        ax.set_ylim(0, 108)
+    axes[0][0].set_ylabel("share of the summed pass times [%] (total on top)")
+    axes[0][-1].legend(fontsize=8, loc="center left", bbox_to_anchor=(1.0, 0.5))
+    fig.suptitle(f"crumple: time per pass\n{machine}", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return True
+
+
+def largest_within(series_for_config, budget_ms):
+    fits = [(n, b) for n, b in series_for_config.items() if b.median() <= budget_ms]
+    if not fits:
+        return None
+    return max(fits, key=lambda nb: nb[0])
+
+
+def report(json_path, run, context, benches, out_dir, charts):
+    series = frame_series(benches)
+    m = run.get("machine", {})
+    model = m.get("model", "unknown CPU")
+    lines = []
+    title_tag = m.get("tag", os.path.basename(os.path.abspath(out_dir)))
+    lines.append(f"# crumple benchmark: {model} ({title_tag})")
+    lines.append("")
+    lines.append(f"Written by `scripts/bench_report.py` from `{os.path.basename(json_path)}` "
+                 f"({run.get('mode', '?')} mode, {run.get('date', context.get('date', '?'))}, "
+                 f"git `{run.get('git', '?')}`).")
+    lines.append("")
+    lines.append("## Machine")
+    lines.append("")
+    hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
+    lines.append(f"- CPU: {model}{hv}; {m.get('cpus', context.get('num_cpus', '?'))} CPUs "
+                 f"({m.get('cores_per_socket', '?')} cores per socket, {m.get('threads_per_core', '?')} thread(s) per core); "
+                 f"L2 {m.get('l2', '?')}, L3 {m.get('l3', '?')}; {context.get('mhz_per_cpu', '?')} MHz")
+    lines.append(f"- SIMD: **{m.get('simd', '?')}** (flags: {', '.join(m.get('flags', [])) or '?'})")
+    lines.append(f"- Compiler: {m.get('compiler', '?')} (binary: {context.get('crumple_compiler', '?')}); "
+                 f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")
+    lines.append(f"- Backends built: {context.get('crumple_backends', '?')}; kernel {m.get('kernel', '?')}; "
+                 f"load average at start {', '.join(f'{x:.2f}' for x in context.get('load_avg', [])) or '?'}")
+    load = context.get("load_avg", [])
+    cpus = context.get("num_cpus") or m.get("cpus") or 1
+    if load and load[0] > 0.5 * cpus:
+        lines.append(f"- **The machine was busy**: load average {load[0]:.2f} on {cpus} CPUs when the run started, "
+                     "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
+    if run.get("mode") == "quick":
+        lines.append("- **Quick mode** (`--quick`): N <= 256 and few, short repetitions; a smoke test of the harness, "
+                     "not numbers to publish")
+    if context.get("library_build_type") == "debug":
+        lines.append("- Google Benchmark library: Debian's libbenchmark 1.7.1 reports itself as a debug build; "
+                     "that concerns the harness's own bookkeeping, not the measured code, which is timed by "
+                     "`steady_clock` around the frames (manual time)")
+    lines.append("")
+    lines.append("## How it was run")
+    lines.append("")
+    lines.append(f"- `{run.get('command', 'scripts/bench.sh')}`, which ran:")
+    lines.append(f"  `{run.get('benchmark_command', '?')}`")
+    lines.append(f"- {run.get('repetitions', '?')} repetitions per benchmark, randomly interleaved across benchmarks, "
+                 f"at least {run.get('min_time', '?')} s of timed frames per repetition; "
+                 f"{run.get('seconds', '?')} s in all. Medians and CV (sample standard deviation / mean) are over the repetitions.")
+    prep = context.get("crumple_prep_fraction_of_sphere_time")
+    prep_txt = f"{float(prep):g} x sphere_time" if prep else "the prepared point"
+    lines.append(f"- `BM_Frame/<backend>/<threads>/<N>`: one 1/60 s frame of the default sphere crumple "
+                 f"(`crumple::Params` defaults) on an N x N grid, timed from a state prepared by simulating to "
+                 f"{prep_txt}, where edges split and restore every frame. Each iteration clones the prepared state "
+                 "and runs one warm-up frame (both untimed), then times a fixed batch of frames "
+                 f"({context.get('crumple_frames_per_iteration', '?')}, as N: frames) with `steady_clock` "
+                 "(manual time) and reports their mean: every iteration simulates the same frames. "
+                 "vertices/edges: live counts at the timed frames; splits/restores: per timed frame.")
+    lines.append(f"- `BM_Frame/bullet/1/<N>`: Bullet {context.get('bullet_version', '')} `btSoftBody` patch over the same grid "
+                 "(CreatePatch with gendiags: the structural links plus one diagonal per quad), hanging from two pinned corners "
+                 f"under gravity, `stepSimulation(1/60., 1, 1/60.)`, piterations = {context.get('bullet_piterations', '?')}. "
+                 "**A different method**: position-based constraint projection, fixed topology, no fracture, no sphere; "
+                 "it shows what a common soft-body library costs per frame at the same size, not the same physics.")
+    lines.append("")
+    lines.append("## Frame time")
+    lines.append("")
+    if "frame_time.png" in charts:
+        lines.append("![frame time against vertex count](frame_time.png)")
+        lines.append("")
+    lines.append("| benchmark | N | median ms | CV % | reps | vertices | edges | splits/frame | restores/frame | fps |")
+    lines.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for key in order_configs(series):
+        for n, b in sorted(series[key].items()):
+            v, e = b.counter("vertices"), b.counter("edges")
+            sp, rs = b.counter("splits"), b.counter("restores")
+            med = b.median()
+            lines.append(f"| `{key[0]}/{key[1]}/{n}` | {n} | {fmt_ms(med)} | {b.cv():.1f} | {len(b.times)} | "
+                         f"{v:,.0f} | {e:,.0f} | {sp:.1f} | {rs:.1f} | {1000.0 / med:,.1f} |")
+    lines.append("")
+    lines.append("## Largest sheet within the frame budget")
+    lines.append("")
+    lines.append("Largest measured N whose median frame time fits the budget (a real-time loop also needs time to draw).")
+    lines.append("")
+    lines.append("| configuration | 60 fps (<= 16.7 ms) | 30 fps (<= 33.3 ms) |")
+    lines.append("|---|---|---|")
+    for key in order_configs(series):
+        cells = []
+        biggest = max(series[key])
+        for fps, ms in BUDGETS:
+            best = largest_within(series[key], ms)
+            if best is None:
+                cells.append(f"none (N={min(series[key])} takes {fmt_ms(series[key][min(series[key])].median())} ms)")
+            else:
+                n, b = best
+                more = " (largest measured)" if n == biggest else ""
+                cells.append(f"N={n}{more}: {b.counter('vertices'):,.0f} vertices, {fmt_ms(b.median())} ms")
+        lines.append(f"| {config_label(key[0], key[1], context)} | {cells[0]} | {cells[1]} |")
+    lines.append("")
+    chain, steps, sizes, table = speedup_steps(series)
+    lines.append("## Speed-up")
+    lines.append("")
+    if table:
+        if "speedup.png" in charts:
+            lines.append("![speed-up per step](speedup.png)")
+            lines.append("")
+        lines.append("| step | " + " | ".join(f"N={n}" for n in sizes) + " |")
+        lines.append("|---|" + "---:|" * len(sizes))
+        for step in steps:
+            vals = {n: s for (st, n, s) in table if st == step}
+            lines.append(f"| {short(step[0])} -> {short(step[1])} | " +
+                         " | ".join(f"{vals[n]:.2f}x" if n in vals else "-" for n in sizes) + " |")
+    else:
+        lines.append("Only one crumple configuration was measured; no speed-up to show.")
+    lines.append("")
+    if "passes.png" in charts:
+        lines.append("## Time per pass")
+        lines.append("")
+        lines.append("![per-pass breakdown](passes.png)")
+        lines.append("")
+    uneven = [name for name, b in benches.items() if FRAME.match(name) and b.counter("mismatch") > 0]
+    if uneven:
+        lines.append("## Iterations that did different work")
+        lines.append("")
+        lines.append("These benchmarks had iterations whose splits/restores differed from the dry run of the same frames "
+                     "(counter `mismatch`): the backend is not deterministic there, so their iterations are not exactly comparable.")
+        lines.append("")
+        for name in sorted(uneven):
+            lines.append(f"- `{name}`: median {benches[name].counter('mismatch'):.0f} iterations per repetition")
+        lines.append("")
+    errors = {name: b.errors for name, b in benches.items() if b.errors}
+    if errors:
+        lines.append("## Benchmarks that reported an error (no time)")
+        lines.append("")
+        for name, errs in sorted(errors.items()):
+            lines.append(f"- `{name}`: {errs[0]} ({len(errs)} of {len(errs) + len(benches[name].times)} repetitions)")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("json")
+    ap.add_argument("--run", help="run.json written by scripts/bench.sh")
+    ap.add_argument("--out", help="output folder (default: the JSON's folder)")
+    ap.add_argument("--headline", help="also copy frame_time.png to this path")
+    args = ap.parse_args()
+    out = args.out or os.path.dirname(os.path.abspath(args.json))
+    os.makedirs(out, exist_ok=True)
+    run = {}
+    if args.run and os.path.exists(args.run):
+        with open(args.run) as f:
+            run = json.load(f)
+    context, benches = load(args.json)
+    series = frame_series(benches)
+    if not series:
+        print(f"bench_report: no BM_Frame benchmark with times in {args.json}", file=sys.stderr)
+        return 1
+    m = run.get("machine", {})
+    machine = f"{m.get('model', context.get('host_name', '?'))}, {m.get('simd', '?')}, {m.get('cpus', context.get('num_cpus', '?'))} cores, {m.get('compiler', context.get('crumple_compiler', ''))}"
+    charts = []
+    chart_frame_time(series, context, machine, os.path.join(out, "frame_time.png"))
+    charts.append("frame_time.png")
+    if chart_speedup(series, machine, os.path.join(out, "speedup.png")):
+        charts.append("speedup.png")
+    if chart_passes(pass_series(benches), machine, os.path.join(out, "passes.png")):
+        charts.append("passes.png")
+    text = report(args.json, run, context, benches, out, charts)
+    with open(os.path.join(out, "REPORT.md"), "w") as f:
+        f.write(text + "\n")
+    print(text)
+    print(f"\nbench_report: wrote {', '.join(charts + ['REPORT.md'])} to {out}")
+    if args.headline:
+        os.makedirs(os.path.dirname(os.path.abspath(args.headline)), exist_ok=True)
+        shutil.copyfile(os.path.join(out, "frame_time.png"), args.headline)
+        print(f"bench_report: copied frame_time.png to {args.headline}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
