@@ -83,7 +83,7 @@ SceneSetup make_scene(const InputMesh& mesh, const Params& p) {
   if (p.scene == Scene::Free) {
     for (Vec3d& x : s.position)
       for (int d = 0; d < 3; ++d) x[d] = s.center[d] + p.squeeze * (x[d] - s.center[d]);
-  } else {
+  } else if (p.scene == Scene::Sphere) {
     s.sphere = true;
     s.radius_start = p.sphere_start * s.reach;
     s.radius_end = p.sphere_end * s.reach;

@@ -58,9 +58,9 @@ struct Estimate {
 //     iterations (or after 4000). The top of a grid's spectrum is clustered, but the Rayleigh
 //     quotient converges with the square of the eigenvector's error, which is plenty for a
 //     +-10 % band;
-//   * Gershgorin's bound max_i sum_j |(M^-1 K)_ij| <= 2 max_i sum_e kappa_e / m_i (the K rows of
-//     a spring network: diagonal sum_e kappa_e (u u^T), off-diagonals of the same total) is an
-//     upper bound to check the estimate against.
+//   * the block Gershgorin bound (3x3 blocks, spectral norms) 2 max_i sum_e kappa_e / m_i (row i
+//     of K at rest: diagonal block sum_e kappa_e u u^T, off-diagonal blocks -kappa_e u u^T, each
+//     of norm kappa_e) is an upper bound to check the estimate against.
 Estimate estimate_omega_max(const InputMesh& mesh, const Params& p_in, const std::vector<double>* masses = nullptr) {
   Params p = p_in;
   auto sim = make_simulator("reference", mesh, p);

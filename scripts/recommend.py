@@ -1,0 +1,109 @@
+#!/usr/bin/python3
+"""Which integrator and step to use for a scene and an error budget, from the saved accuracy
+study (results/accuracy/sweep.json, written by scripts/accuracy_sweep.py).
+
+    /usr/bin/python3 scripts/recommend.py --scene hang --kappa 1e5 --error 1e-2
+    /usr/bin/python3 scripts/recommend.py --scene free --kappa 1e3 --error 1e-3 --json
+
+Prints the cheapest (method, step) whose measured error after 1 s (RMS vertex distance to the
+reference / sheet diagonal) is within the budget, its cost (ms per simulated second on the
+study's 16 x 16 grid; fast backend 2 threads, Baraff-Witkin on the reference backend) and the
+crumple options to get it, then the next-best alternatives. A kappa that was not studied for the
+scene takes the nearest studied one (in log kappa) and says so. Exit status 0 with a
+recommendation, 1 when no tested method meets the budget, 2 for bad arguments.
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from accuracy_common import frames_for  # noqa: E402
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--scene", required=True, help="hang or free (the scenes of the study)")
+    ap.add_argument("--kappa", type=float, required=True, help="stiffness per unit mass")
+    ap.add_argument("--error", type=float, required=True, help="error budget (fraction of the sheet diagonal)")
+    ap.add_argument("--table", default=os.path.join(ROOT, "results", "accuracy", "sweep.json"),
+                    help="the saved study (default: the full run's results/accuracy/sweep.json)")
+    ap.add_argument("--alternatives", type=int, default=3)
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    a = ap.parse_args(argv)
+    if not (a.kappa > 0 and a.error > 0):
+        ap.error("--kappa and --error must be positive")
+    try:
+        with open(a.table) as f:
+            data = json.load(f)
+    except OSError as e:
+        print(f"recommend: cannot read {a.table}: {e.strerror} (run scripts/accuracy.sh first)", file=sys.stderr)
+        return 2
+    cases = [c for c in data["cases"] if c["scene"] == a.scene]
+    if not cases:
+        scenes = sorted({c["scene"] for c in data["cases"]})
+        print(f"recommend: scene '{a.scene}' was not studied; studied: {', '.join(scenes)}", file=sys.stderr)
+        return 2
+    case = min(cases, key=lambda c: abs(math.log10(c["kappa"]) - math.log10(a.kappa)))
+    notes = []
+    if abs(math.log10(case["kappa"]) - math.log10(a.kappa)) > 1e-9:
+        studied = ", ".join(f"{c['kappa']:g}" for c in cases)
+        notes.append(f"kappa {a.kappa:g} was not studied for the {a.scene} scene; using the nearest, "
+                     f"kappa {case['kappa']:g} (studied: {studied})")
+    ref_unc = case.get("reference_change")
+    if ref_unc and a.error < 3 * ref_unc:
+        notes.append(f"the budget is within 3x of the reference's own uncertainty ({ref_unc:.2g}): "
+                     "errors that small are not resolved by this study")
+    ok = [r for r in case["rows"] if not r["failed"] and r.get("error") is not None
+          and r.get("ms_per_s") and r["error"] <= a.error]
+    ok.sort(key=lambda r: r["ms_per_s"])
+    methods = data["methods"]
+
+    def describe(r):
+        m = methods[r["method"]]
+        n = r["steps_per_s"]
+        opts = m["args"] + ["--backend", m["backend"]] + (["--threads", str(m["threads"])] if m["backend"] == "fast" else [])
+        # h = 1/n: n/60 substeps of the default 1/60 s frame when 60 divides n, else frames as
+        # close to 1/60 s as the step allows (then --frames counts those frames)
+        if n % 60 == 0:
+            step = ["--substeps", str(n // 60)]
+        else:
+            f = frames_for(n)
+            step = ["--frame-dt", f"{f['frame_dt']:.9g}", "--substeps", str(f["substeps"])]
+        return {"method": r["method"], "text": m["text"], "step": f"1/{n}", "h": 1.0 / n,
+                "ms_per_simulated_s": r["ms_per_s"], "error": r["error"],
+                "crumple_options": " ".join(str(o) for o in opts + step)}
+
+    out = {"scene": a.scene, "kappa_asked": a.kappa, "kappa_used": case["kappa"], "error_budget": a.error,
+           "notes": notes, "recommendation": describe(ok[0]) if ok else None,
+           "alternatives": [describe(r) for r in ok[1:1 + a.alternatives]],
+           "source": os.path.relpath(a.table, ROOT), "timing_note": data.get("timing_note")}
+    if a.json:
+        print(json.dumps(out, indent=1))
+        return 0 if ok else 1
+    print(f"scene {a.scene}, kappa {case['kappa']:g}, error budget {a.error:g} (after 1 s, fraction of the sheet diagonal)")
+    for n in notes:
+        print(f"  note: {n}")
+    if not ok:
+        best = min((r for r in case["rows"] if not r["failed"] and r.get("error") is not None),
+                   key=lambda r: r["error"], default=None)
+        print("  none of the tested methods and steps (h >= 1/1000 s) meets this budget")
+        if best:
+            print(f"  the most accurate tested: {best['method']} at h = 1/{best['steps_per_s']}, error {best['error']:.2g}")
+        return 1
+    r = describe(ok[0])
+    print(f"  cheapest: {r['method']} ({r['text']}) at h = {r['step']} s")
+    print(f"    error {r['error']:.2g}, cost {r['ms_per_simulated_s']:.3g} ms per simulated second (16 x 16 grid)")
+    print(f"    crumple run {r['crumple_options']}")
+    for alt in out["alternatives"]:
+        print(f"  then: {alt['method']} at h = {alt['step']}: error {alt['error']:.2g}, "
+              f"{alt['ms_per_simulated_s']:.3g} ms/s")
+    if data.get("timing_note"):
+        print(f"  ({data['timing_note']})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
