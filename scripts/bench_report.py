@@ -28,7 +28,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
-PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
 PEERS = {"bullet"}  # different methods: charted, never part of the speed-up chain
