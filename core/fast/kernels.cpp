@@ -6,19 +6,23 @@
 #include "model/random.h"
 
 #define CRUMPLE_SIMD_LOOP _Pragma("omp simd")
+#define CRUMPLE_SCALAR_KERNEL [[gnu::optimize("no-tree-vectorize")]]
 
 namespace crumple::fast {
 
 // GCC honours __restrict on parameters, not on local pointers: each vectorized kernel is a
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
-// whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime);
-// without it GCC 12 gives up on the edge pass's many gathers ("no vectype").
+// whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
+// CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel where measurement says gathers lose:
+// on this Zen 4 the AVX-512 build of the edge pass took 8.9 ms against 4.6 ms scalar, and the
+// triangle pass 1.9 against 1.4 ms (N = 256, BM_Pass, results/amd-epyc_avx512/REPORT.md of
+// commit d7b599a): their loads are random gathers of positions and normals, and Zen 4 executes
+// vector gathers slower than the scalar loads they replace.
 namespace {
-void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
+CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
                          const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
                          const float* __restrict x, const float* __restrict y, const float* __restrict z,
                          Float4* __restrict area, int begin, int end) {
-  CRUMPLE_SIMD_LOOP
   for (int t = begin; t < end; ++t) {
     const int a = v0[t], b = v1[t], c = v2[t];
     const float ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
@@ -58,7 +62,7 @@ void vertex_normals(Topology& m, int begin, int end) {
 }
 
 namespace {
-void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
                       const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
                       const float* __restrict l0, const float* __restrict msum, const std::uint8_t* __restrict flags,
                       const float* __restrict x, const float* __restrict y, const float* __restrict z,
@@ -66,7 +70,6 @@ void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, 
                       const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
                       EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
-  CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
     const int a = A[e], b = B[e];
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
