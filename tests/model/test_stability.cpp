@@ -26,12 +26,7 @@ namespace {
 // Parameters of the linear-stability checks: the free scene at rest (no squeeze, no dome), only
 // springs (bending off, no gravity, no damping), no topology changes.
 Params spring_only(double kappa, Integrator integ) {
-  Params p;
-  p.scene = Scene::Free;
-  p.squeeze = 1.0;
-  p.perturb = 0;
-  p.bend = 0;
-  p.gravity = 0;
+  Params p = still_params();
   p.damping = 0;
   p.fracture = p.restoration = false;
   p.kappa = kappa;
