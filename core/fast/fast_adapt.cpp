@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "fast/fast_sim.h"
+#include "fast/layout.h"
 #include "fast/pass_timer.h"
 #include "model/random.h"
 
@@ -65,10 +66,15 @@ StepEvents FastSimulator::adapt_apply() {
         continue;
       }
     }
-    if (decisions_[e] == 1) splits.push_back(e);
-    if (decisions_[e] == 2) restores.push_back(e);
+    if (decisions_[e] == 1) splits.push_back(topo_.E.lid[e]);
+    if (decisions_[e] == 2) restores.push_back(topo_.E.lid[e]);
     ++e;
   }
+  // Events apply in ascending logical edge id (the order of MODEL.md §4 and of the reference);
+  // each event's slot is looked up when it applies, as earlier events of the pass reuse slots
+  // only of ids they free, never of pending ones.
+  std::sort(splits.begin(), splits.end());
+  std::sort(restores.begin(), restores.end());
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
   std::vector<int> changed;  // triangles changed in this pass
   auto stamp = [&](int t) {
@@ -77,13 +83,15 @@ StepEvents FastSimulator::adapt_apply() {
     if (tri_stamp_[t] != pass_) changed.push_back(t);
     tri_stamp_[t] = pass_;
   };
-  for (int e : splits) {
+  for (int id : splits) {
+    const int e = topo_.E.phys[id];
     if (touched(topo_.E.tri0[e]) || touched(topo_.E.tri1[e])) continue;
-    if (!split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign)))) continue;
+    if (!split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(id), Draw::FlatSign)))) continue;
     for (int t : topo_.records[topo_.E.record[e]].t) stamp(t);
     ++ev.splits;
   }
-  for (int e : restores) {
+  for (int id : restores) {
+    const int e = topo_.E.phys[id];
     const auto t = topo_.records[topo_.E.record[e]].t;
     if (std::any_of(t.begin(), t.end(), touched) || !can_restore(e)) continue;
     restore_edge(e);
@@ -111,8 +119,16 @@ StepEvents FastSimulator::adapt() {
     PassTimer t(pass_seconds_, int(Pass::AdaptTest));
     adapt_decide();
   }
-  PassTimer t(pass_seconds_, int(Pass::TopologyApply));
-  return adapt_apply();
+  StepEvents ev;
+  {
+    PassTimer t(pass_seconds_, int(Pass::TopologyApply));
+    ev = adapt_apply();
+  }
+  if (layout_stale(topo_, layout_fraction_)) {
+    PassTimer t(pass_seconds_, int(Pass::Layout));
+    relayout(topo_, par_, layout_scratch_);
+  }
+  return ev;
 }
 
 bool FastSimulator::split_edge(int e, float flat_draw) {
@@ -295,18 +311,20 @@ std::vector<Decision> FastSimulator::decide() const {
   FastSimulator tmp(*this);
   tmp.adapt_decide();
   std::vector<Decision> out(tmp.decisions_.size());
-  for (size_t e = 0; e < out.size(); ++e) out[e].kind = tmp.decisions_[e];
+  for (size_t e = 0; e < out.size(); ++e) out[tmp.topo_.E.lid[e]].kind = tmp.decisions_[e];
   return out;
 }
 
-bool FastSimulator::split(int e) {
-  if (e < 0 || e >= topo_.E.size()) return false;
+bool FastSimulator::split(int id) {
+  if (id < 0 || id >= topo_.E.size()) return false;
   compute_normals();
   normals_valid_ = false;
-  return split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign)));
+  return split_edge(topo_.E.phys[id], float(uniform(params_.seed, steps_, std::uint32_t(id), Draw::FlatSign)));
 }
 
-bool FastSimulator::restore(int e) {
+bool FastSimulator::restore(int id) {
+  if (id < 0 || id >= topo_.E.size()) return false;
+  const int e = topo_.E.phys[id];
   if (!can_restore(e)) return false;
   normals_valid_ = false;
   restore_edge(e);

@@ -5,6 +5,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "fast/layout.h"
 #include "fast/pass_timer.h"
 #include "model/random.h"
 
@@ -17,7 +18,7 @@ constexpr int kReduceBlock = 8192; ///< fixed block of the deterministic reducti
 }  // namespace
 
 const char* to_string(Pass p) {
-  static const char* names[] = {"normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply"};
+  static const char* names[] = {"normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply", "layout"};
   return names[int(p)];
 }
 
@@ -60,7 +61,8 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
 
 FastSimulator::FastSimulator(const FastSimulator& o)
     : params_(o.params_), scene_(o.scene_), par_(o.par_), topo_(o.topo_), time_(o.time_), steps_(o.steps_),
-      decisions_(o.decisions_), tri_stamp_(o.tri_stamp_), pass_(o.pass_), normals_valid_(o.normals_valid_),
+      decisions_(o.decisions_), tri_stamp_(o.tri_stamp_), pass_(o.pass_), layout_fraction_(o.layout_fraction_),
+      layout_scratch_(o.layout_scratch_), normals_valid_(o.normals_valid_),
       pass_seconds_(o.pass_seconds_) {
   topo_.reserve(o.topo_.V.m.capacity(), o.topo_.E.a.capacity(), o.topo_.T.v0.capacity());
 }
@@ -99,7 +101,7 @@ void FastSimulator::integrate() {
   const int n = topo_.V.size();
   float corr[3] = {0, 0, 0};
   auto pin = [&] {  // pinned vertices (hang scene) are fixed neighbours in every sweep
-    for (int k : scene_.pinned) topo_.V.g[k] = Float4{};
+    for (int k : scene_.pinned) topo_.V.g[topo_.V.phys[k]] = Float4{};
   };
   if (params_.integrator == Integrator::Explicit) {
     par_.run(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
@@ -121,10 +123,11 @@ void FastSimulator::integrate() {
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
   par_.run(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
-  for (int k : scene_.pinned) {
-    topo_.V.x[k] = float(scene_.position[k][0]), topo_.V.y[k] = float(scene_.position[k][1]);
-    topo_.V.z[k] = float(scene_.position[k][2]);
-    topo_.V.vx[k] = topo_.V.vy[k] = topo_.V.vz[k] = 0;
+  for (int k : scene_.pinned) {  // input vertex k has logical id k
+    const int v = topo_.V.phys[k];
+    topo_.V.x[v] = float(scene_.position[k][0]), topo_.V.y[v] = float(scene_.position[k][1]);
+    topo_.V.z[v] = float(scene_.position[k][2]);
+    topo_.V.vx[v] = topo_.V.vy[v] = topo_.V.vz[v] = 0;
   }
 }
 
@@ -163,6 +166,7 @@ void FastSimulator::run_pass(Pass p) {
     case Pass::Integrate: integrate(); break;
     case Pass::AdaptTest: adapt_decide(); break;
     case Pass::TopologyApply: adapt(); break;
+    case Pass::Layout: relayout(topo_, par_, layout_scratch_); break;
     case Pass::kCount: break;
   }
 }

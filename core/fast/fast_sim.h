@@ -12,6 +12,9 @@
 //              [Eq 6] and restoration [Eq 10] decisions per edge, all on that one state) ->
 //              serial: splits in ascending edge id, then restores in ascending id, each skipped
 //              when an earlier event of the pass changed one of its triangles (MODEL.md §4).
+//   layout     when enough elements were created since the last time, relayout() (layout.h)
+//              reorders every slot along a space-filling curve of the rest positions, keeping
+//              logical ids, so that neighbours stay in nearby cache lines.
 //   Threads only ever split a pass's range; the serial part touches O(events) elements and
 //   keeps every helper structure (adjacency, wings, msum) up to date incrementally, so a frame
 //   with a few hundred splits costs about what one without does.
@@ -21,6 +24,7 @@
 #include <vector>
 
 #include "fast/kernels.h"
+#include "fast/layout.h"
 #include "fast/parallel.h"
 #include "fast/topology.h"
 #include "sim/scene.h"
@@ -29,7 +33,7 @@
 namespace crumple::fast {
 
 /// The passes of a step, for per-pass timing and benchmarks.
-enum class Pass { Normals, EdgeForces, Gather, Integrate, AdaptTest, TopologyApply, kCount };
+enum class Pass { Normals, EdgeForces, Gather, Integrate, AdaptTest, TopologyApply, Layout, kCount };
 const char* to_string(Pass);
 
 class FastSimulator final : public Simulator {
@@ -62,6 +66,10 @@ class FastSimulator final : public Simulator {
   /// Seconds spent in each pass since construction (steps only).
   const std::array<double, int(Pass::kCount)>& pass_seconds() const { return pass_seconds_; }
   const Topology& topology() const { return topo_; }
+  /// When to relayout: once the vertices created since the last one reach this fraction of the
+  /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
+  /// but for the last bits of the momentum correction (layout.h).
+  void set_layout_fraction(double f) { layout_fraction_ = f; }
 
  private:
   StepConstants step_constants() const;
@@ -84,6 +92,8 @@ class FastSimulator final : public Simulator {
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::uint64_t pass_ = 0;                ///< topology passes so far
+  double layout_fraction_ = 1.0 / 16;     ///< see set_layout_fraction
+  LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};
 };

@@ -1,4 +1,6 @@
 // The fast backend's state as the rest of the program sees it: totals, snapshots, test hooks.
+// Everything here is in logical ids (topology.h): element k of every list is logical id k,
+// whatever slot layout.h has put it in, and sums run in logical order.
 #include <algorithm>
 #include <cmath>
 
@@ -14,7 +16,8 @@ Totals FastSimulator::totals() const {
   T.auxiliary = topo_.live_auxiliary();
   T.triangles = topo_.live_triangles();
   const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
-  for (int v = 0; v < V.size(); ++v) {
+  for (int id = 0; id < V.size(); ++id) {
+    const int v = V.phys[id];
     if (!(V.m[v] > 0)) continue;
     const double m = V.m[v], vx = V.vx[v], vy = V.vy[v], vz = V.vz[v];
     T.mass += m;
@@ -28,7 +31,8 @@ Totals FastSimulator::totals() const {
     T.max_distance = std::max(T.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
     if (!std::isfinite(V.x[v] + V.y[v] + V.z[v] + v2)) T.max_distance = NAN;
   }
-  for (int e = 0; e < topo_.E.size(); ++e) {
+  for (int id = 0; id < topo_.E.size(); ++id) {
+    const int e = topo_.E.phys[id];
     if (topo_.E.flags[e] != (kAlive | kMesh | kBreakable) && topo_.E.flags[e] != (kAlive | kMesh)) continue;
     const int a = topo_.E.a[e], b = topo_.E.b[e];
     const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
@@ -43,7 +47,8 @@ Totals FastSimulator::totals() const {
 Snapshot FastSimulator::snapshot() const {
   const Vertices& V = topo_.V;
   Snapshot s;
-  for (int v = 0; v < V.size(); ++v) {
+  for (int id = 0; id < V.size(); ++id) {
+    const int v = V.phys[id];
     const bool alive = V.m[v] > 0;
     s.vertex_alive.push_back(alive);
     s.rest.push_back(alive ? Vec3d{V.rx[v], V.ry[v], V.rz[v]} : Vec3d{});
@@ -51,22 +56,27 @@ Snapshot FastSimulator::snapshot() const {
     s.velocity.push_back(alive ? Vec3d{V.vx[v], V.vy[v], V.vz[v]} : Vec3d{});
     s.mass.push_back(alive ? V.m[v] : 0.0);
   }
-  for (int e = 0; e < topo_.E.size(); ++e) {
+  auto vid = [&](int v) { return v >= 0 ? int(V.lid[v]) : v; };
+  for (int id = 0; id < topo_.E.size(); ++id) {
+    const int e = topo_.E.phys[id];
     EdgeView ev;
     const std::uint8_t f = topo_.E.flags[e];
     if (f & kAlive) {
-      ev.a = topo_.E.a[e];
-      ev.b = topo_.E.b[e];
-      ev.wing_l = topo_.E.wl[e];
-      ev.wing_r = topo_.E.wr[e];
+      ev.a = vid(topo_.E.a[e]);
+      ev.b = vid(topo_.E.b[e]);
+      ev.wing_l = vid(topo_.E.wl[e]);
+      ev.wing_r = vid(topo_.E.wr[e]);
       ev.rest = topo_.E.l0[e];
       ev.auxiliary = !(f & kMesh);
       ev.breakable = f & kBreakable;
     }
     s.edges.push_back(ev);
   }
-  for (int t = 0; t < topo_.T.size(); ++t)
-    s.triangles.push_back(topo_.T.alive[t] ? topo_.T.corners(t) : std::array<int, 3>{-1, -1, -1});
+  for (int id = 0; id < topo_.T.size(); ++id) {
+    const int t = topo_.T.phys[id];
+    s.triangles.push_back(topo_.T.alive[t] ? std::array<int, 3>{vid(topo_.T.v0[t]), vid(topo_.T.v1[t]), vid(topo_.T.v2[t])}
+                                           : std::array<int, 3>{-1, -1, -1});
+  }
   return s;
 }
 
@@ -74,7 +84,10 @@ std::vector<Vec3d> FastSimulator::normals() const {
   FastSimulator tmp(*this);
   tmp.compute_normals();
   std::vector<Vec3d> out;
-  for (int v = 0; v < tmp.topo_.V.size(); ++v) out.push_back({tmp.topo_.V.nx[v], tmp.topo_.V.ny[v], tmp.topo_.V.nz[v]});
+  for (int id = 0; id < tmp.topo_.V.size(); ++id) {
+    const int v = tmp.topo_.V.phys[id];
+    out.push_back({tmp.topo_.V.nx[v], tmp.topo_.V.ny[v], tmp.topo_.V.nz[v]});
+  }
   return out;
 }
 
@@ -83,16 +96,20 @@ std::vector<Vec3d> FastSimulator::forces() const {
   tmp.compute_normals();
   tmp.compute_forces();
   std::vector<Vec3d> out;
-  for (int v = 0; v < tmp.topo_.V.size(); ++v) out.push_back({tmp.topo_.V.fx[v], tmp.topo_.V.fy[v], tmp.topo_.V.fz[v]});
+  for (int id = 0; id < tmp.topo_.V.size(); ++id) {
+    const int v = tmp.topo_.V.phys[id];
+    out.push_back({tmp.topo_.V.fx[v], tmp.topo_.V.fy[v], tmp.topo_.V.fz[v]});
+  }
   return out;
 }
 
 void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) {
   Vertices& V = topo_.V;
   for (int k = 0; k < V.size() && k < int(x.size()) && k < int(v.size()); ++k) {
-    if (!(V.m[k] > 0)) continue;
-    V.x[k] = float(x[k][0]), V.y[k] = float(x[k][1]), V.z[k] = float(x[k][2]);
-    V.vx[k] = float(v[k][0]), V.vy[k] = float(v[k][1]), V.vz[k] = float(v[k][2]);
+    const int s = V.phys[k];
+    if (!(V.m[s] > 0)) continue;
+    V.x[s] = float(x[k][0]), V.y[s] = float(x[k][1]), V.z[s] = float(x[k][2]);
+    V.vx[s] = float(v[k][0]), V.vy[s] = float(v[k][1]), V.vz[s] = float(v[k][2]);
   }
   normals_valid_ = false;
 }
@@ -100,7 +117,7 @@ void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec
 void FastSimulator::set_masses(const std::vector<double>& m) {
   Vertices& V = topo_.V;
   for (int k = 0; k < V.size() && k < int(m.size()); ++k)
-    if (V.m[k] > 0) V.m[k] = float(m[k]);
+    if (V.m[V.phys[k]] > 0) V.m[V.phys[k]] = float(m[k]);
   for (int k = 0; k < V.size(); ++k)
     if (V.m[k] > 0) topo_.update_msum(k);
 }

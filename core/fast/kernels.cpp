@@ -252,7 +252,8 @@ namespace {
 template <bool exact_step>
 void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
                    const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                   const float* __restrict l0, const std::uint8_t* __restrict flags, const float* __restrict x,
+                   const float* __restrict l0, const std::uint8_t* __restrict flags,
+                   const std::int32_t* __restrict lid, const float* __restrict x,
                    const float* __restrict y, const float* __restrict z, const float* __restrict nx,
                    const float* __restrict ny, const float* __restrict nz, std::uint8_t* __restrict out,
                    int begin, int end) {
@@ -271,7 +272,8 @@ void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, co
     P = std::fmin(std::fmax(P, 0.0f), 1.0f);
     const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - P, c.step_exponent);
     // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
-    const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(e)) << 2 | std::uint64_t(Draw::Fracture)));
+    // Keyed by the logical id: the same stream whatever the slot order (layout.h).
+    const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
     const bool can = (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
     out[e] = std::uint8_t(can & (Pstep > 0) & (u < Pstep));
@@ -284,7 +286,7 @@ void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, i
   const Edges& E = m.E;
   if (c.fracture) {
     auto run = [&](auto body) {
-      body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), V.x.data(), V.y.data(),
+      body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), E.lid.data(), V.x.data(), V.y.data(),
            V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(), out, begin, end);
     };
     if (c.step_exponent == 1.0f) run(fracture_body<true>);

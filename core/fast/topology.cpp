@@ -34,22 +34,33 @@ void reserve_all(std::size_t n, A&... arrays) {
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next,
-              V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
+              V.rx, V.ry, V.rz, V.n_springs, V.n_tris, V.lid, V.phys);
   V.springs.reserve(nv * V.stride_e);
   V.nbrs.reserve(nv * V.stride_e);
   V.tris.reserve(nv * V.stride_t);
   V.wings.reserve(nv * V.stride_t);
-  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
-  reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
+  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out, E.lid, E.phys);
+  reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
+}
+
+// A slot for a new element: the newest freed logical id and its slot (LIFO, the id policy of
+// sim/simulator.h), or a new id and slot at the end (both ranges always have the same size).
+template <class Kind>
+int take_slot(Kind& k, std::size_t size) {
+  ++k.created;
+  if (!k.free_ids.empty()) {
+    const int id = k.free_ids.back();
+    k.free_ids.pop_back();
+    return k.phys[id];
+  }
+  k.lid.push_back(std::int32_t(size));
+  k.phys.push_back(std::int32_t(size));
+  return int(size);
 }
 
 int Topology::new_vertex() {
-  int v;
-  if (!V.free_ids.empty()) {
-    v = V.free_ids.back();
-    V.free_ids.pop_back();
-  } else {
-    v = V.size();
+  const int v = take_slot(V, V.m.size());
+  if (v == int(V.m.size())) {
     const std::size_t n = std::size_t(v) + 1;
     grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum,
          V.g, V.g_next, V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
@@ -66,18 +77,13 @@ void Topology::free_vertex(int v) {
   V.x[v] = V.y[v] = V.z[v] = V.vx[v] = V.vy[v] = V.vz[v] = V.m[v] = 0;
   V.nx[v] = V.ny[v] = V.nz[v] = V.rx[v] = V.ry[v] = V.rz[v] = 0;
   V.n_springs[v] = V.n_tris[v] = 0;
-  V.free_ids.push_back(v);
+  V.free_ids.push_back(V.lid[v]);
 }
 
 int Topology::new_edge(int a, int b, float l0) {
-  int e;
-  if (!E.free_ids.empty()) {
-    e = E.free_ids.back();
-    E.free_ids.pop_back();
-  } else {
-    e = E.size();
+  const int e = take_slot(E, E.a.size());
+  if (e == int(E.a.size()))
     grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
-  }
   E.a[e] = a;
   E.b[e] = b;
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
@@ -99,18 +105,12 @@ void Topology::free_edge(int e) {
   E.msum[e] = 0;
   E.flags[e] = 0;
   E.out[e] = EdgeOut{};
-  E.free_ids.push_back(e);
+  E.free_ids.push_back(E.lid[e]);
 }
 
 int Topology::new_triangle() {
-  int t;
-  if (!T.free_ids.empty()) {
-    t = T.free_ids.back();
-    T.free_ids.pop_back();
-  } else {
-    t = T.size();
-    grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
-  }
+  const int t = take_slot(T, T.v0.size());
+  if (t == int(T.v0.size())) grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 1;
@@ -123,7 +123,7 @@ void Topology::free_triangle(int t) {
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 0;
   T.area[t] = Float4{};
-  T.free_ids.push_back(t);
+  T.free_ids.push_back(T.lid[t]);
 }
 
 int Topology::mesh_edge(int a, int b) const {
@@ -222,9 +222,19 @@ std::string Topology::check() const {
     (err << ... << parts);
     return err.str();
   };
+  // Logical ids and slots are inverse maps of each other, over the same range.
+  auto bijective = [](const auto& lid, const std::vector<std::int32_t>& phys) {
+    if (lid.size() != phys.size()) return false;
+    for (std::size_t k = 0; k < lid.size(); ++k)
+      if (lid[k] < 0 || std::size_t(lid[k]) >= phys.size() || phys[std::size_t(lid[k])] != std::int32_t(k)) return false;
+    return true;
+  };
+  if (!bijective(V.lid, V.phys) || V.lid.size() != V.m.size()) return fail("vertex logical ids are not a bijection");
+  if (!bijective(E.lid, E.phys) || E.lid.size() != E.a.size()) return fail("edge logical ids are not a bijection");
+  if (!bijective(T.lid, T.phys) || T.lid.size() != T.v0.size()) return fail("triangle logical ids are not a bijection");
   std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
-  for (int v : V.free_ids) vertex_dead[v] = 1;
-  for (int e : E.free_ids) edge_free[e] = 1;
+  for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;
+  for (int e : E.free_ids) edge_free[E.phys[e]] = 1;
   for (int t = 0; t < T.size(); ++t) {
     if (!T.alive[t]) continue;
     const auto v = T.corners(t);

@@ -1,10 +1,15 @@
 // The fast backend's mesh: structure-of-arrays topology and state (Jolt's split of immutable-ish
 // topology from per-step state, Box2D's hot/cold split), and the serial topology edits.
 //
-// Vertices, edges and triangles are ids into parallel arrays; removed ids go on LIFO free lists
-// (the id policy of sim/simulator.h, identical to the reference's, so the random stream keyed
-// by edge id gives the same decisions). A dead element keeps harmless values: mass 0, no
-// adjacency, an edge with msum 0 (zero stiffness) joining vertex 0 to itself.
+// Vertices, edges and triangles are *slots* in parallel arrays, and each slot carries a logical
+// id (`lid`) with its inverse map (`phys`). Logical ids follow the id policy of sim/simulator.h,
+// identical to the reference's (removed ids on LIFO free lists), so the random stream keyed by
+// edge id gives the same decisions and snapshots list elements in the same order; slots are
+// where the data lives, and layout.h reorders them in space for cache locality without changing
+// any logical id. Everything inside the backend (kernels, adjacency, records) speaks slots; only
+// the random stream, the event order and the Simulator interface speak logical ids. A freed slot
+// keeps its logical id, so reusing the id reuses the slot. A dead element keeps harmless values:
+// mass 0, no adjacency, an edge with msum 0 (zero stiffness) joining vertex 0 to itself.
 //
 // Adjacency is what makes every force pass a race-free *gather*: each vertex lists its springs
 // and its triangles in fixed-stride slots (one cache line for typical valences); the stride
@@ -75,9 +80,12 @@ struct Vertices {
   Array<std::int32_t> wings;      ///< per vertex: the edge opposite it in each triangle slot
   Array<std::uint16_t> n_springs; ///< used slots in springs
   Array<std::uint16_t> n_tris;    ///< used slots in tris
+  Array<std::int32_t> lid;        ///< logical id of each slot
+  std::vector<std::int32_t> phys; ///< slot of each logical id (the inverse of lid)
   int stride_e = 16;              ///< slots per vertex in springs
   int stride_t = 16;              ///< slots per vertex in tris
-  std::vector<int> free_ids;      ///< LIFO free list
+  std::vector<int> free_ids;      ///< LIFO free list of logical ids
+  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
   int size() const { return int(m.size()); }
 };
@@ -91,7 +99,10 @@ struct Edges {
   Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
   Array<EdgeOut> out;            ///< per-step output of the edge pass
-  std::vector<int> free_ids;     ///< LIFO free list
+  Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
+  std::vector<std::int32_t> phys;///< slot of each logical id
+  std::vector<int> free_ids;     ///< LIFO free list of logical ids
+  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
   int size() const { return int(a.size()); }
 };
@@ -101,7 +112,10 @@ struct Triangles {
   Array<std::int32_t> e0, e1, e2;  ///< e_k joins v_k and v_(k+1)
   Array<std::uint8_t> alive;       ///< 1: in use
   Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
-  std::vector<int> free_ids;       ///< LIFO free list
+  Array<std::int32_t> lid;         ///< logical id of each slot
+  std::vector<std::int32_t> phys;  ///< slot of each logical id
+  std::vector<int> free_ids;       ///< LIFO free list of logical ids
+  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
   int size() const { return int(v0.size()); }
   std::array<int, 3> corners(int t) const { return {v0[t], v1[t], v2[t]}; }
@@ -121,6 +135,7 @@ class Topology {
   /// reallocating (growth past it is geometric, as for any vector).
   void reserve(std::size_t vertices, std::size_t edges, std::size_t triangles);
 
+  // Element edits take and return slots; the logical id follows the id policy.
   int new_vertex();
   int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
   int new_triangle();

@@ -1,0 +1,241 @@
+#include "fast/layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <utility>
+
+namespace crumple::fast {
+
+namespace {
+
+constexpr int kGrain = 4096;  ///< minimum items per parallel chunk of a permutation
+
+/// Spreads the low 21 bits of v to every third bit (one axis of a 3-D Morton code).
+std::uint64_t spread3(std::uint64_t v) {
+  v &= 0x1fffffULL;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+/// Stable LSD radix sort of the slots 0..n-1 by code (11-bit digits over `bits`) into `order`.
+void radix_order(LayoutScratch& s, int bits, std::vector<int>& order) {
+  const int n = int(s.code.size());
+  order.resize(n);
+  s.idx.resize(n);
+  s.code2.resize(n);
+  for (int k = 0; k < n; ++k) order[k] = k;
+  constexpr int kDigit = 11;
+  constexpr std::uint64_t kMask = (std::uint64_t(1) << kDigit) - 1;
+  for (int shift = 0; shift < bits; shift += kDigit) {
+    s.count.assign(std::size_t(1) << kDigit, 0);
+    for (int k = 0; k < n; ++k) ++s.count[(s.code[k] >> shift) & kMask];
+    int sum = 0;
+    for (int& c : s.count) sum += std::exchange(c, sum);
+    for (int k = 0; k < n; ++k) {
+      const int to = s.count[(s.code[k] >> shift) & kMask]++;
+      s.code2[to] = s.code[k];
+      s.idx[to] = order[k];
+    }
+    s.code.swap(s.code2);
+    order.swap(s.idx);
+  }
+}
+
+/// Stable counting sort of the slots by s.key (values in [0, buckets)) into `order`.
+void counting_order(LayoutScratch& s, int buckets, std::vector<int>& order) {
+  const int n = int(s.key.size());
+  s.count.assign(std::size_t(buckets) + 1, 0);
+  order.resize(n);
+  for (int k : s.key) ++s.count[std::size_t(k) + 1];
+  for (int b = 0; b < buckets; ++b) s.count[b + 1] += s.count[b];
+  for (int k = 0; k < n; ++k) order[s.count[s.key[k]]++] = k;
+}
+
+/// of[old] = new from order[new] = old.
+void inverse(const std::vector<int>& order, std::vector<int>& of) {
+  of.resize(order.size());
+  for (int k = 0; k < int(order.size()); ++k) of[order[k]] = k;
+}
+
+/// The spare buffer of element type T.
+template <class T> Array<T>& spare(LayoutScratch& s);
+template <> Array<float>& spare(LayoutScratch& s) { return s.spare_f; }
+template <> Array<std::int32_t>& spare(LayoutScratch& s) { return s.spare_i; }
+template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
+template <> Array<std::uint16_t>& spare(LayoutScratch& s) { return s.spare_u16; }
+template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
+
+/// a[new] = f(a[order[new]]), `width` items per slot (for the adjacency lists: only the first
+/// count[new] of them, the rest of a list's room is never read): gathered into the spare
+/// buffer, which then swaps with a (keeping a's reserved room).
+template <class T, class F>
+void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order, F f, int width = 1,
+             const Array<std::uint16_t>* count = nullptr) {
+  Array<T>& out = spare<T>(s);
+  if (out.capacity() < a.capacity()) out.reserve(a.capacity());
+  out.resize(a.size());
+  const T* src = a.data();
+  T* dst = out.data();
+  par.run(int(order.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      const int used = count ? (*count)[k] : width;
+      for (int w = 0; w < used; ++w) dst[std::size_t(k) * width + w] = f(src[std::size_t(order[k]) * width + w]);
+    }
+  });
+  a.swap(out);
+}
+template <class T>
+void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order) {
+  permute(par, s, a, order, [](const T& v) { return v; });
+}
+
+/// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
+void vertex_order(const Vertices& V, LayoutScratch& s) {
+  const int n = V.size();
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int v = 0; v < n; ++v) {
+    if (!(V.m[v] > 0)) continue;
+    const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], r[d]), hi[d] = std::max(hi[d], r[d]);
+  }
+  // Resolution: a sheet of n vertices has about sqrt(n) per axis; four times that per axis.
+  const int bits = std::clamp(int(std::ceil(std::log2(std::max(n, 2)) / 2)) + 2, 4, 21);
+  const double extent = std::max({double(hi[0]) - lo[0], double(hi[1]) - lo[1], double(hi[2]) - lo[2], 1e-30});
+  const double scale = double((1 << bits) - 1) / extent;
+  s.code.resize(n);
+  for (int v = 0; v < n; ++v) {
+    if (!(V.m[v] > 0)) {
+      s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
+      continue;
+    }
+    const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
+    std::uint64_t code = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double((1 << bits) - 1));
+      code |= spread3(std::uint64_t(q)) << d;
+    }
+    s.code[v] = code;
+  }
+  radix_order(s, 3 * bits + 1, s.vorder);
+}
+
+}  // namespace
+
+namespace {
+template <class T>
+void copy_warm(Array<T>& to, const Array<T>& from) {
+  to.clear();
+  to.reserve(from.capacity());
+  to.resize(from.capacity());  // touches every page once
+  to.resize(from.size());
+}
+}  // namespace
+
+LayoutScratch::LayoutScratch(const LayoutScratch& o) { *this = o; }
+
+LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
+  if (this == &o) return *this;
+  vorder = o.vorder, vnew = o.vnew, eorder = o.eorder, enew = o.enew, torder = o.torder, tnew = o.tnew;
+  key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2;
+  copy_warm(spare_f, o.spare_f);
+  copy_warm(spare_i, o.spare_i);
+  copy_warm(spare_u8, o.spare_u8);
+  copy_warm(spare_u16, o.spare_u16);
+  copy_warm(spare_f4, o.spare_f4);
+  return *this;
+}
+
+bool layout_stale(const Topology& m, double fraction) {
+  if (fraction < 0) return false;
+  return double(m.V.created) >= fraction * m.V.size();
+}
+
+void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
+  Vertices& V = m.V;
+  Edges& E = m.E;
+  Triangles& T = m.T;
+  const int nv = V.size(), ne = E.size(), nt = T.size();
+
+  vertex_order(V, s);
+  inverse(s.vorder, s.vnew);
+  const std::vector<int>& vnew = s.vnew;
+  s.key.resize(ne);
+  for (int e = 0; e < ne; ++e) s.key[e] = (E.flags[e] & kAlive) ? std::min(vnew[E.a[e]], vnew[E.b[e]]) : nv;
+  counting_order(s, nv + 1, s.eorder);
+  inverse(s.eorder, s.enew);
+  s.key.resize(nt);
+  for (int t = 0; t < nt; ++t)
+    s.key[t] = T.alive[t] ? std::min({vnew[T.v0[t]], vnew[T.v1[t]], vnew[T.v2[t]]}) : nv;
+  counting_order(s, nv + 1, s.torder);
+  inverse(s.torder, s.tnew);
+  const std::vector<int>&vorder = s.vorder, &eorder = s.eorder, &torder = s.torder, &enew = s.enew, &tnew = s.tnew;
+
+  auto vmap = [&](std::int32_t v) { return v >= 0 ? std::int32_t(vnew[v]) : v; };
+  auto emap = [&](std::int32_t e) { return e >= 0 ? std::int32_t(enew[e]) : e; };
+  auto tmap = [&](std::int32_t t) { return t >= 0 ? std::int32_t(tnew[t]) : t; };
+
+  // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
+  // next step before anything reads them), then the adjacency lists with their entries renamed.
+  for (Array<float>* a : {&V.x, &V.y, &V.z, &V.vx, &V.vy, &V.vz, &V.m, &V.nx, &V.ny, &V.nz, &V.rx, &V.ry, &V.rz})
+    permute(par, s, *a, vorder);
+  permute(par, s, V.n_springs, vorder);
+  permute(par, s, V.n_tris, vorder);
+  permute(par, s, V.lid, vorder);
+  permute(par, s, V.springs, vorder, [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); }, V.stride_e,
+          &V.n_springs);
+  permute(par, s, V.nbrs, vorder, vmap, V.stride_e, &V.n_springs);
+  permute(par, s, V.tris, vorder, [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, V.stride_t,
+          &V.n_tris);
+  permute(par, s, V.wings, vorder, emap, V.stride_t, &V.n_tris);
+
+  // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
+  // itself, as the topology's convention says.
+  const std::uint8_t* old_flags = E.flags.data();
+  auto alive_edge = [&](int k) { return (old_flags[eorder[k]] & kAlive) != 0; };
+  for (Array<std::int32_t>* a : {&E.a, &E.b}) {
+    permute(par, s, *a, eorder, vmap);
+    par.run(ne, kGrain, [&](int b, int e) {
+      for (int k = b; k < e; ++k)
+        if (!alive_edge(k)) (*a)[k] = 0;
+    });
+  }
+  for (Array<std::int32_t>* a : {&E.wl, &E.wr}) permute(par, s, *a, eorder, vmap);
+  for (Array<std::int32_t>* a : {&E.tri0, &E.tri1}) permute(par, s, *a, eorder, tmap);
+  permute(par, s, E.l0, eorder);
+  permute(par, s, E.msum, eorder);
+  permute(par, s, E.record, eorder);
+  permute(par, s, E.lid, eorder);
+  permute(par, s, E.flags, eorder);  // last: the loops above read the old flags
+
+  // Triangles (dead ones keep corners 0 and no edges).
+  const std::uint8_t* old_alive = T.alive.data();
+  for (Array<std::int32_t>* a : {&T.v0, &T.v1, &T.v2})
+    permute(par, s, *a, torder, [&](std::int32_t v) { return std::int32_t(vnew[v]); });
+  par.run(nt, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k)
+      if (!old_alive[torder[k]]) T.v0[k] = T.v1[k] = T.v2[k] = 0;
+  });
+  for (Array<std::int32_t>* a : {&T.e0, &T.e1, &T.e2}) permute(par, s, *a, torder, emap);
+  permute(par, s, T.area, torder);
+  permute(par, s, T.lid, torder);
+  permute(par, s, T.alive, torder);  // last: read above
+
+  // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
+  for (SplitRecord& r : m.records) {
+    r.n = vmap(r.n);
+    for (int q = 0; q < 4; ++q) r.k[q] = vmap(r.k[q]), r.e[q] = emap(r.e[q]), r.t[q] = tmap(r.t[q]);
+  }
+
+  // The inverse maps; free lists hold logical ids and do not change.
+  for (int k = 0; k < nv; ++k) V.phys[V.lid[k]] = k;
+  for (int k = 0; k < ne; ++k) E.phys[E.lid[k]] = k;
+  for (int k = 0; k < nt; ++k) T.phys[T.lid[k]] = k;
+  V.created = E.created = T.created = 0;
+}
+
+}  // namespace crumple::fast
