@@ -2,9 +2,12 @@
 // range kernel (kernels.h) run on the backend's TBB arena, and the topology edits serial.
 //
 // Design note (the whole pipeline of one step; cf. Box2D's solver.h):
-//   forces     triangle_areas -> vertex_normals -> edge_forces -> gather_forces   (4 passes)
-//              Springs, bending and predictor are computed per element and gathered per
-//              vertex over its adjacency lists: no scatter, no atomics, one summation order.
+//   forces     triangle_areas -> vertex_normals -> hinge_forces -> gather_forces  (4 passes)
+//              Bending needs the four normals of a hinge: the hinge pass computes its stencil
+//              once per edge (16 bytes out). Springs are evaluated per vertex from its side
+//              (twice per spring, which costs less than writing and re-reading a per-spring
+//              output); the gather adds the bending of the hinges of its adjacency lists: no
+//              scatter, no atomics, one summation order on any thread count.
 //   integrate  K x jacobi_sweep (double-buffered guesses) -> momentum_drift (fixed-block
 //              reduction) -> advance (new v and x, sphere constraint). Explicit Euler replaces
 //              the sweeps by explicit_velocity; Baraff-Witkin runs on the reference path.
@@ -33,7 +36,7 @@
 namespace crumple::fast {
 
 /// The passes of a step, for per-pass timing and benchmarks.
-enum class Pass { Normals, EdgeForces, Gather, Integrate, AdaptTest, TopologyApply, Layout, kCount };
+enum class Pass { Normals, Hinges, Gather, Integrate, AdaptTest, TopologyApply, Layout, kCount };
 const char* to_string(Pass);
 
 class FastSimulator final : public Simulator {
@@ -92,7 +95,7 @@ class FastSimulator final : public Simulator {
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::uint64_t pass_ = 0;                ///< topology passes so far
-  double layout_fraction_ = 1.0 / 16;     ///< see set_layout_fraction
+  double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};

@@ -62,27 +62,22 @@ void vertex_normals(Topology& m, int begin, int end) {
 }
 
 namespace {
-CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
-                      const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                      const float* __restrict l0, const float* __restrict msum, const std::uint8_t* __restrict flags,
-                      const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                      const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
-                      const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
-                      EdgeOut* __restrict out, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void hinge_forces_body(const StepConstants& c, const std::int32_t* __restrict A,
+                       const std::int32_t* __restrict B, const std::int32_t* __restrict WL,
+                       const std::int32_t* __restrict WR, const float* __restrict msum,
+                       const std::uint8_t* __restrict flags, const float* __restrict x, const float* __restrict y,
+                       const float* __restrict z, const float* __restrict nx, const float* __restrict ny,
+                       const float* __restrict nz, Float4* __restrict hinge, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
-    const int a = A[e], b = B[e];
+    // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
+    if (!((flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0)) {
+      hinge[e] = Float4{};
+      continue;
+    }
+    const int a = A[e], b = B[e], l = WL[e], r = WR[e];
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const float inv = lt > 0 ? 1.0f / lt : 0.0f;
-    // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
-    const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
-    const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
-    const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum[e] * inv;
-    const float kap = c.kappa * msum[e];
-    // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
-    const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
-    const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
     const float nrl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];
     const float Bmag = (1.0f - nrl) * lt * 0.5f;
     const float gx = (x[r] + nx[r]) - (x[l] + nx[l]), gy = (y[r] + ny[r]) - (y[l] + ny[l]),
@@ -90,52 +85,67 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::i
     const float ox = x[r] - x[l], oy = y[r] - y[l], oz = z[r] - z[l];
     const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
     const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
-    const float k = hinge ? sign * c.bend * msum[e] * Bmag : 0.0f;
+    const float k = sign * c.bend * msum[e] * Bmag;
     // Mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l (removed in the balanced form).
-    out[e] = EdgeOut{s * dx, s * dy, s * dz, kap, kap * dvx, kap * dvy, kap * dvz, k,
-                     quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
-                     quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), {0, 0, 0, 0, 0}};
+    hinge[e] = Float4{quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
+                      quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), k};
   }
 }
 }  // namespace
 
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.msum.data(),
-                   m.E.flags.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
-                   m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
+void hinge_forces(Topology& m, const StepConstants& c, int begin, int end) {
+  hinge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.msum.data(), m.E.flags.data(),
+                    m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(),
+                    m.E.hinge.data(), begin, end);
 }
 
-void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e, st = V.stride_t;
-  const EdgeOut* __restrict out = m.E.out.data();
+  const Float4* __restrict hinge = m.E.hinge.data();
+  const float* __restrict l0 = m.E.l0.data();
+  const float *__restrict x = V.x.data(), *__restrict y = V.y.data(), *__restrict z = V.z.data();
+  const float *__restrict vx = V.vx.data(), *__restrict vy = V.vy.data(), *__restrict vz = V.vz.data();
+  const float* __restrict mass_of = V.m.data();
   for (int v = begin; v < end; ++v) {
     float fx = 0, fy = 0, fz = 0, ks = 0, jx = 0, jy = 0, jz = 0, kn = 0, mx = 0, my = 0, mz = 0;
+    const float mass = mass_of[v];
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
+    const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const EdgeOut& o = out[springs[k] >> 1];
-      const float sg = (springs[k] & 1) ? -1.0f : 1.0f;  // b receives the opposite of a
-      fx += sg * o.fx;
-      fy += sg * o.fy;
-      fz += sg * o.fz;
-      ks += o.kap;
-      jx += sg * o.jx;  // kappa_e (v_other - v_v)
-      jy += sg * o.jy;
-      jz += sg * o.jz;
-      kn -= o.kb;  // hinge role: f = -k n_v - mean
-      mx += o.bx;
-      my += o.by;
-      mz += o.bz;
+      // The spring to u, evaluated from v's side: Hookean with kappa_e = kappa (m_v + m_u)
+      // [Eq 5] and damping along the axis (§2). Evaluated from u's side it gives exactly the
+      // opposite force (every difference changes sign exactly), so momentum pairs up.
+      const int e = springs[k] >> 1, u = nbrs[k];
+      const float dx = x[v] - x[u], dy = y[v] - y[u], dz = z[v] - z[u];
+      const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const float inv = lt > 0 ? 1.0f / lt : 0.0f;
+      const float dvx = vx[u] - vx[v], dvy = vy[u] - vy[v], dvz = vz[u] - vz[v];
+      const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
+      const float ms = mass + mass_of[u];
+      const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * ms * inv;
+      const float kap = c.kappa * ms;
+      fx += s * dx;
+      fy += s * dy;
+      fz += s * dz;
+      ks += kap;
+      jx += kap * dvx;  // kappa_e (v_u - v_v): the edge's part of (df/dx) v
+      jy += kap * dvy;
+      jz += kap * dvz;
+      const Float4& h = hinge[e];
+      kn -= h.w;  // hinge role: f = -k n_v - mean
+      mx += h.x;
+      my += h.y;
+      mz += h.z;
     }
     const std::int32_t* wings = &V.wings[std::size_t(v) * st];
     for (int k = 0; k < V.n_tris[v]; ++k) {
-      const EdgeOut& o = out[wings[k]];  // v is a wing of the edge opposite it
-      kn += o.kb;  // wing role: f = +k n_v - mean
-      mx += o.bx;
-      my += o.by;
-      mz += o.bz;
+      const Float4& h = hinge[wings[k]];  // v is a wing of the edge opposite it
+      kn += h.w;  // wing role: f = +k n_v - mean
+      mx += h.x;
+      my += h.y;
+      mz += h.z;
     }
-    const float mass = V.m[v];
     fx += kn * V.nx[v] - mx;
     fy += kn * V.ny[v] - my;
     fz += kn * V.nz[v] - mz - mass * c.gravity;
@@ -147,11 +157,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
       const float inv = 1.0f / (mass + 2.0f * c.h2 * ks + dead);
-      V.g[v] = Float4{V.vx[v] + (c.h * fx + c.h2 * jx) * inv, V.vy[v] + (c.h * fy + c.h2 * jy) * inv,
-                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, 0.0f};
+      V.g[v] = Float4{vx[v] + (c.h * fx + c.h2 * jx) * inv, vy[v] + (c.h * fy + c.h2 * jy) * inv,
+                      vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, mass};
     } else {
       const float inv = c.h / (mass + dead);
-      V.g[v] = Float4{V.vx[v] + fx * inv, V.vy[v] + fy * inv, V.vz[v] + fz * inv, 0.0f};
+      V.g[v] = Float4{vx[v] + fx * inv, vy[v] + fy * inv, vz[v] + fz * inv, mass};
     }
   }
 }
@@ -159,24 +169,22 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e;
-  const EdgeOut* __restrict out = m.E.out.data();
   const Float4* __restrict g = V.g.data();
   for (int v = begin; v < end; ++v) {
     float sx = 0, sy = 0, sz = 0;
-    const std::int32_t* springs = &V.springs[std::size_t(v) * se];
+    const float mass = V.m[v];
     const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const float kap = out[springs[k] >> 1].kap;
       const Float4& o = g[nbrs[k]];
+      const float kap = c.kappa * (mass + o.w);  // kappa_e [Eq 5], the neighbour's mass in w
       sx += kap * o.x;
       sy += kap * o.y;
       sz += kap * o.z;
     }
-    const float mass = V.m[v];
     const float inv = 1.0f / (mass + c.h2 * V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
     V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + c.h2 * sx) * inv,
                          (mass * V.vy[v] + c.h * V.fy[v] + c.h2 * sy) * inv,
-                         (mass * V.vz[v] + c.h * V.fz[v] + c.h2 * sz) * inv, 0.0f};
+                         (mass * V.vz[v] + c.h * V.fz[v] + c.h2 * sz) * inv, mass};
   }
 }
 
@@ -184,7 +192,7 @@ void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end) 
   Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
     const float inv = V.m[v] > 0 ? c.h / V.m[v] : 0.0f;
-    V.g[v] = Float4{V.vx[v] + V.fx[v] * inv, V.vy[v] + V.fy[v] * inv, V.vz[v] + V.fz[v] * inv, 0.0f};
+    V.g[v] = Float4{V.vx[v] + V.fx[v] * inv, V.vy[v] + V.fy[v] * inv, V.vz[v] + V.fz[v] * inv, V.m[v]};
   }
 }
 
