@@ -28,6 +28,47 @@ std::array<int, 3> replaced(const Triangles& T, int t, int from, int to) {
   return v;
 }
 
+template <class T>
+void prefetch(const T* p) {
+  __builtin_prefetch(p, 1, 3);
+}
+/// The per-edge lines an event on edge e reads first.
+void prefetch_edge(const Topology& m, int e) {
+  const Edges& E = m.E;
+  prefetch(&E.flags[e]), prefetch(&E.a[e]), prefetch(&E.b[e]), prefetch(&E.wl[e]), prefetch(&E.wr[e]);
+  prefetch(&E.tri0[e]), prefetch(&E.tri1[e]), prefetch(&E.l0[e]), prefetch(&E.record[e]), prefetch(&E.lid[e]);
+}
+void prefetch_vertex(const Topology& m, int v) {
+  if (v < 0) return;
+  const Vertices& V = m.V;
+  for (const Array<float>* a : {&V.x, &V.y, &V.z, &V.vx, &V.vy, &V.vz, &V.m, &V.nx, &V.ny, &V.nz, &V.rx, &V.ry, &V.rz})
+    prefetch(&(*a)[v]);
+  prefetch(&V.n_springs[v]), prefetch(&V.n_tris[v]);
+  prefetch(m.springs_of(v)), prefetch(m.nbrs_of(v)), prefetch(m.tris_of(v)), prefetch(m.wings_of(v));
+}
+void prefetch_triangle(const Topology& m, int t) {
+  if (t < 0) return;
+  const Triangles& T = m.T;
+  prefetch(&T.v0[t]), prefetch(&T.v1[t]), prefetch(&T.v2[t]), prefetch(&T.e0[t]), prefetch(&T.e1[t]);
+  prefetch(&T.e2[t]), prefetch(&T.alive[t]), prefetch(&T.area[t]);
+}
+/// Everything a split of e reads (its edge lines must be cached already: prefetch_edge).
+void prefetch_split(const Topology& m, int e) {
+  for (int v : {m.E.a[e], m.E.b[e], m.E.wl[e], m.E.wr[e]}) prefetch_vertex(m, v);
+  prefetch_triangle(m, m.E.tri0[e]);
+  prefetch_triangle(m, m.E.tri1[e]);
+}
+/// Everything a restore of e reads (its record must be cached already).
+void prefetch_restore(const Topology& m, int e) {
+  const SplitRecord& r = m.records[m.E.record[e]];
+  prefetch_vertex(m, r.n);
+  for (int q = 0; q < 4; ++q) {
+    prefetch_vertex(m, r.k[q]);
+    if (r.e[q] >= 0) prefetch_edge(m, r.e[q]);
+    prefetch_triangle(m, r.t[q]);
+  }
+}
+
 bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
   if (t < 0 || t >= T.size() || !T.alive[t]) return false;
   const auto v = T.corners(t);
@@ -55,26 +96,40 @@ void FastSimulator::adapt_decide() {
 StepEvents FastSimulator::adapt_apply() {
   StepEvents ev;
   ++pass_;
-  std::vector<int> splits, restores;
+  // The events, in parallel over fixed blocks of edges, each event as (logical id << 32 | slot).
+  // They apply in ascending logical edge id (the order of MODEL.md §4 and of the reference). A
+  // pending event's edge keeps its slot through the pass: splits free no edge, and restores free
+  // only mesh edges, never a pending (auxiliary) one.
   const int n = int(decisions_.size());
-  for (int e = 0; e < n;) {
-    if (e + 8 <= n) {  // most decisions are 0: skip them eight at a time
-      std::uint64_t word;
-      std::memcpy(&word, &decisions_[e], 8);
-      if (word == 0) {
-        e += 8;
-        continue;
+  constexpr int kBlock = 16384;
+  const int blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::vector<std::uint64_t>> found(2 * std::size_t(blocks));
+  par_.run(blocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      const int end = std::min(n, (b + 1) * kBlock);
+      for (int e = b * kBlock; e < end;) {
+        if (e + 8 <= end) {  // most decisions are 0: skip them eight at a time
+          std::uint64_t word;
+          std::memcpy(&word, &decisions_[e], 8);
+          if (word == 0) {
+            e += 8;
+            continue;
+          }
+        }
+        if (decisions_[e]) found[2 * b + decisions_[e] - 1].push_back(std::uint64_t(topo_.E.lid[e]) << 32 | std::uint32_t(e));
+        ++e;
       }
     }
-    if (decisions_[e] == 1) splits.push_back(topo_.E.lid[e]);
-    if (decisions_[e] == 2) restores.push_back(topo_.E.lid[e]);
-    ++e;
-  }
-  // Events apply in ascending logical edge id (the order of MODEL.md §4 and of the reference);
-  // each event's slot is looked up when it applies, as earlier events of the pass reuse slots
-  // only of ids they free, never of pending ones.
-  std::sort(splits.begin(), splits.end());
-  std::sort(restores.begin(), restores.end());
+  });
+  auto in_order = [&](int kind) {
+    std::vector<std::uint64_t> all;
+    for (int b = 0; b < blocks; ++b) all.insert(all.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
+    std::sort(all.begin(), all.end());
+    std::vector<int> slots(all.size());
+    for (std::size_t k = 0; k < all.size(); ++k) slots[k] = int(std::uint32_t(all[k]));
+    return slots;
+  };
+  const std::vector<int> splits = in_order(0), restores = in_order(1);
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
   std::vector<int> changed;  // triangles changed in this pass
   auto stamp = [&](int t) {
@@ -83,32 +138,142 @@ StepEvents FastSimulator::adapt_apply() {
     if (tri_stamp_[t] != pass_) changed.push_back(t);
     tri_stamp_[t] = pass_;
   };
-  for (int id : splits) {
-    const int e = topo_.E.phys[id];
-    if (touched(topo_.E.tri0[e]) || touched(topo_.E.tri1[e])) continue;
-    if (!split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(id), Draw::FlatSign)))) continue;
-    for (int t : topo_.records[topo_.E.record[e]].t) stamp(t);
-    ++ev.splits;
+  // Each event touches a few hundred bytes in some fifty cache lines of the SoA arrays, far
+  // from the previous event's: prefetching the next events' lines while one applies overlaps
+  // those misses (the events themselves still apply one by one, in order).
+  const Topology& m = topo_;
+  constexpr int kFar = 8, kNear = 3;
+  // Splits. Acceptance and new ids are decided first, serially in event order: a split is
+  // skipped when an earlier accepted split of the pass changed one of its edge's two
+  // triangles, and those are still the triangles it had at the start of the pass (a split
+  // changes only its own two, and any later split sharing one is skipped). Accepted splits then
+  // apply in rounds: a split's round is one more than the last round of an earlier split
+  // sharing one of its vertices, so the splits of a round have disjoint vertex sets (hence
+  // disjoint edges, triangles and adjacency lists) and run in parallel, while every vertex
+  // still receives its edits in event order: the result is the serial one, bit for bit. msum
+  // [Eq 5] of the springs at touched vertices is renewed once at the end.
+  const int nv0 = m.V.size();
+  if (vertex_stamp_.size() < std::size_t(nv0)) vertex_stamp_.resize(std::size_t(nv0), 0);
+  const std::uint64_t split_mark = 3 * pass_, restored_mark = 3 * pass_ + 1, renewed_mark = 3 * pass_ + 2;
+  std::vector<SplitPlan> plans;
+  std::vector<int> round_of;
+  round_last_.assign(std::size_t(nv0), 0);
+  std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
+  int rounds = 0, need_springs = 0, need_tris = 0;
+  for (std::size_t k = 0; k < splits.size(); ++k) {
+    if (k + kFar < splits.size()) prefetch_edge(m, splits[k + kFar]);
+    const int e = splits[k];
+    const int tL = m.E.tri0[e], tR = m.E.tri1[e];
+    if (touched(tL) || touched(tR)) continue;
+    const SplitPlan p = plan_split(e, float(uniform(params_.seed, steps_, std::uint32_t(m.E.lid[e]), Draw::FlatSign)));
+    if (p.e < 0) continue;
+    const int ends[4] = {m.E.a[e], m.E.b[e], m.E.wl[e], m.E.wr[e]};
+    int round = 0;
+    for (int v : ends)
+      if (v >= 0) round = std::max(round, round_last_[v]);
+    ++round;
+    for (int v : ends) {
+      if (v < 0) continue;
+      round_last_[v] = round;
+      if (vertex_stamp_[v] != split_mark) vertex_stamp_[v] = split_mark, involved.push_back(v);
+    }
+    rounds = std::max(rounds, round);
+    for (int t : {tL, tR, p.tris[0], p.tris[1]}) stamp(t);
+    plans.push_back(p);
+    round_of.push_back(round);
   }
-  for (int id : restores) {
-    const int e = topo_.E.phys[id];
-    const auto t = topo_.records[topo_.E.record[e]].t;
-    if (std::any_of(t.begin(), t.end(), touched) || !can_restore(e)) continue;
+  // Room in the adjacency lists for every append (a split adds at most one spring and one
+  // triangle to each of i, j, l, r), so that no list widens while rounds run.
+  {
+    std::vector<int> adds(std::size_t(nv0), 0);
+    for (const SplitPlan& p : plans)
+      for (int v : {m.E.a[p.e], m.E.b[p.e], m.E.wl[p.e], m.E.wr[p.e]})
+        if (v >= 0) ++adds[v];
+    for (int v : involved) {
+      need_springs = std::max(need_springs, m.V.n_springs[v] + adds[v]);
+      need_tris = std::max(need_tris, m.V.n_tris[v] + adds[v]);
+    }
+    topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
+  }
+  // The rounds, each a parallel loop over its splits (in event order within the round).
+  std::vector<int> by_round(plans.size()), start(std::size_t(rounds) + 2, 0);
+  for (int r : round_of) ++start[r + 1];
+  for (int r = 1; r <= rounds; ++r) start[r + 1] += start[r];
+  {
+    std::vector<int> fill(start.begin(), start.end());
+    for (std::size_t k = 0; k < plans.size(); ++k) by_round[fill[round_of[k]]++] = int(k);
+  }
+  std::vector<std::uint8_t> applied(plans.size(), 0);
+  for (int r = 1; r <= rounds; ++r) {
+    par_.run(start[r + 1] - start[r], 64, [&](int b, int e) {
+      for (int k = start[r] + b; k < start[r] + e; ++k) {
+        if (k + kNear < start[r] + e) prefetch_split(m, plans[by_round[k + kNear]].e);
+        applied[by_round[k]] = apply_split(plans[by_round[k]]);
+      }
+    });
+  }
+  // msum of every spring at a touched vertex, from its final masses: each edge written once,
+  // by its endpoint a if that was touched, else by b.
+  for (const SplitPlan& p : plans) {
+    vertex_stamp_.resize(std::max(vertex_stamp_.size(), std::size_t(p.n) + 1), 0);
+    vertex_stamp_[p.n] = split_mark;
+    involved.push_back(p.n);
+  }
+  par_.run(int(involved.size()), 256, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      const int v = involved[k];
+      const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
+      for (int q = 0; q < m.V.n_springs[v]; ++q) {
+        const bool is_b = sp[q] & 1;
+        if (is_b && vertex_stamp_[nb[q]] == split_mark) continue;  // a writes it
+        topo_.E.msum[sp[q] >> 1] = is_b ? m.V.m[nb[q]] + m.V.m[v] : m.V.m[v] + m.V.m[nb[q]];
+      }
+    }
+  });
+  for (std::uint8_t a : applied) ev.splits += a;
+  // Restores: can_restore of every candidate in parallel on the state after the splits. An
+  // earlier restore of this pass can change a later candidate's answer only through a vertex
+  // both involve (edges and triangles of a restore join its own vertices), so a candidate is
+  // re-checked, in order, only when an earlier restore touched one of its vertices.
+  std::vector<std::uint8_t> restorable(restores.size());
+  par_.run(int(restores.size()), 256, [&](int b, int e) {
+    for (int k = b; k < e; ++k) restorable[k] = can_restore(restores[k]);
+  });
+  if (vertex_stamp_.size() < std::size_t(m.V.size())) vertex_stamp_.resize(std::size_t(m.V.size()), 0);
+  for (std::size_t k = 0; k < restores.size(); ++k) {
+    if (k + 2 * kFar < restores.size()) prefetch_edge(m, restores[k + 2 * kFar]);
+    if (k + kFar < restores.size()) prefetch(&m.records[m.E.record[restores[k + kFar]]]);
+    if (k + kNear < restores.size()) prefetch_restore(m, restores[k + kNear]);
+    const int e = restores[k];
+    const SplitRecord& r = m.records[m.E.record[e]];
+    const auto t = r.t;
+    if (std::any_of(t.begin(), t.end(), touched)) continue;
+    bool near_earlier = vertex_stamp_[r.n] == restored_mark;
+    for (int v : r.k) near_earlier |= v >= 0 && vertex_stamp_[v] == restored_mark;
+    if (!(near_earlier ? can_restore(e) : restorable[k])) continue;
+    const std::array<int, 5> verts{r.n, r.k[0], r.k[1], r.k[2], r.k[3]};
     restore_edge(e);
-    for (int k : t) stamp(k);
+    for (int v : verts)
+      if (v >= 0) vertex_stamp_[v] = restored_mark;
+    for (int q : t) stamp(q);
     ++ev.restores;
   }
   // Bring the areas and normals computed for the decisions up to date where the topology
-  // changed, so the next step need not recompute them all (range kernels on single elements).
-  std::vector<int> verts;
+  // changed, so the next step need not recompute them all (range kernels on single elements,
+  // in parallel; each corner once).
+  std::vector<int> live, verts;
   for (int t : changed) {
     if (!topo_.T.alive[t]) continue;
-    triangle_areas(topo_, t, t + 1);
-    for (int v : topo_.T.corners(t)) verts.push_back(v);
+    live.push_back(t);
+    for (int v : topo_.T.corners(t))
+      if (vertex_stamp_[v] != renewed_mark) vertex_stamp_[v] = renewed_mark, verts.push_back(v);
   }
-  std::sort(verts.begin(), verts.end());
-  verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
-  for (int v : verts) vertex_normals(topo_, v, v + 1);
+  par_.run(int(live.size()), 512, [&](int b, int e) {
+    for (int k = b; k < e; ++k) triangle_areas(topo_, live[k], live[k] + 1);
+  });
+  par_.run(int(verts.size()), 512, [&](int b, int e) {
+    for (int k = b; k < e; ++k) vertex_normals(topo_, verts[k], verts[k] + 1);
+  });
   normals_valid_ = true;
   return ev;
 }
@@ -131,10 +296,43 @@ StepEvents FastSimulator::adapt() {
   return ev;
 }
 
+FastSimulator::SplitPlan FastSimulator::plan_split(int e, float flat_draw) {
+  Topology& m = topo_;
+  SplitPlan p;
+  if (!(m.E.flags[e] & kAlive) || !(m.E.flags[e] & kMesh) || !(m.E.flags[e] & kBreakable)) return p;
+  p.e = e;
+  p.flat_draw = flat_draw;
+  // The order in which a split allocates (the id policy of sim/simulator.h).
+  p.n = m.take_vertex();
+  p.edges[0] = m.take_edge();
+  p.edges[1] = m.take_edge();
+  if (m.E.wl[e] >= 0) p.edges[2] = m.take_edge();
+  if (m.E.wr[e] >= 0) p.edges[3] = m.take_edge();
+  if (m.E.tri0[e] >= 0) p.tris[0] = m.take_triangle();
+  if (m.E.tri1[e] >= 0) p.tris[1] = m.take_triangle();
+  p.record = m.take_record();
+  return p;
+}
+
 bool FastSimulator::split_edge(int e, float flat_draw) {
+  const SplitPlan p = plan_split(e, flat_draw);
+  if (p.e < 0) return false;
+  const bool ok = apply_split(p);
+  update_split_msum(p);
+  return ok;
+}
+
+void FastSimulator::update_split_msum(const SplitPlan& p) {
+  for (int k : topo_.records[p.record].k)
+    if (k >= 0) topo_.update_msum(k);
+  topo_.update_msum(p.n);
+}
+
+bool FastSimulator::apply_split(const SplitPlan& plan) {
   Topology& m = topo_;
   Vertices& V = m.V;
-  if (!(m.E.flags[e] & kAlive) || !(m.E.flags[e] & kMesh) || !(m.E.flags[e] & kBreakable)) return false;
+  const int e = plan.e;
+  const float flat_draw = plan.flat_draw;
   const int i = m.E.a[e], j = m.E.b[e], tL = m.E.tri0[e], tR = m.E.tri1[e];
   const int l = m.E.wl[e], r = m.E.wr[e];
   const D3 xi{V.x[i], V.y[i], V.z[i]}, xj{V.x[j], V.y[j], V.z[j]};
@@ -178,7 +376,8 @@ bool FastSimulator::split_edge(int e, float flat_draw) {
     pn = {pn.x + rec.dm[q] * V.vx[k], pn.y + rec.dm[q] * V.vy[k], pn.z + rec.dm[q] * V.vz[k]};
   }
 
-  const int n = m.new_vertex();
+  const int n = plan.n;
+  m.init_vertex(n);
   V.rx[n] = float(Xn.x), V.ry[n] = float(Xn.y), V.rz[n] = float(Xn.z);
   V.x[n] = float(0.5 * (xi.x + xj.x) + s * theta * nu.x);
   V.y[n] = float(0.5 * (xi.y + xj.y) + s * theta * nu.y);
@@ -192,12 +391,13 @@ bool FastSimulator::split_edge(int e, float flat_draw) {
   m.E.flags[e] = kAlive;
   m.E.l0[e] = float(lt);
   rec.n = n;
-  rec.e[0] = m.new_edge(i, n, float(l0 / 2));
-  rec.e[1] = m.new_edge(n, j, float(l0 / 2));
-  if (l >= 0) rec.e[2] = m.new_edge(l, n, float(rest_dist(l)));
-  if (r >= 0) rec.e[3] = m.new_edge(n, r, float(rest_dist(r)));
-  if (tL >= 0) rec.t[0] = tL, rec.t[1] = m.new_triangle();
-  if (tR >= 0) rec.t[2] = tR, rec.t[3] = m.new_triangle();
+  rec.e = plan.edges;
+  m.init_edge(rec.e[0], i, n, float(l0 / 2));
+  m.init_edge(rec.e[1], n, j, float(l0 / 2));
+  if (l >= 0) m.init_edge(rec.e[2], l, n, float(rest_dist(l)));
+  if (r >= 0) m.init_edge(rec.e[3], n, r, float(rest_dist(r)));
+  if (tL >= 0) rec.t[0] = tL, rec.t[1] = plan.tris[0], m.init_triangle(plan.tris[0]);
+  if (tR >= 0) rec.t[2] = tR, rec.t[3] = plan.tris[1], m.init_triangle(plan.tris[1]);
   bool ok = true;
   if (tL >= 0) {
     const auto v = replaced(m.T, tL, j, n);
@@ -209,19 +409,8 @@ bool FastSimulator::split_edge(int e, float flat_draw) {
     ok &= m.attach(tR, v[0], v[1], v[2]);
     ok &= m.attach(rec.t[3], n, i, r);
   }
-  int id;
-  if (!m.free_records.empty()) {
-    id = m.free_records.back();
-    m.free_records.pop_back();
-    m.records[id] = rec;
-  } else {
-    id = int(m.records.size());
-    m.records.push_back(rec);
-  }
-  m.E.record[e] = id;
-  for (int k : rec.k)
-    if (k >= 0) m.update_msum(k);
-  m.update_msum(n);
+  m.records[plan.record] = rec;
+  m.E.record[e] = plan.record;
   return ok;
 }
 

@@ -82,7 +82,20 @@ class FastSimulator final : public Simulator {
   StepEvents adapt();
   void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
   StepEvents adapt_apply();///< the serial splits and restores of decisions_
-  bool split_edge(int e, float flat_draw);
+  /// A split with its new ids taken in advance (serially, in event order), so that splits of
+  /// disjoint vertex sets can then apply in parallel.
+  struct SplitPlan {
+    int e = -1;                          ///< the edge (-1: not splittable)
+    float flat_draw = 0;                 ///< the FlatSign draw of [Eq 7]
+    int n = -1;                          ///< the new vertex
+    std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
+    std::array<int, 2> tris{-1, -1};     ///< (n,j,l), (n,i,r)
+    int record = -1;                     ///< the split record
+  };
+  SplitPlan plan_split(int e, float flat_draw);
+  bool apply_split(const SplitPlan& p);       ///< all of the split but msum of its springs
+  void update_split_msum(const SplitPlan& p); ///< msum [Eq 5] of the springs at its vertices
+  bool split_edge(int e, float flat_draw);    ///< plan, apply, msum: one split alone
   bool can_restore(int e) const;
   void restore_edge(int e);
 
@@ -94,6 +107,8 @@ class FastSimulator final : public Simulator {
   std::uint64_t steps_ = 0;
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
+  std::vector<std::uint64_t> vertex_stamp_;  ///< 3 x pass + what the pass did to each vertex
+  std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)

@@ -59,6 +59,14 @@ int take_slot(Kind& k, std::size_t size) {
 }
 
 int Topology::new_vertex() {
+  const int v = take_vertex();
+  init_vertex(v);
+  return v;
+}
+
+void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
+
+int Topology::take_vertex() {
   const int v = take_slot(V, V.m.size());
   if (v == int(V.m.size())) {
     const std::size_t n = std::size_t(v) + 1;
@@ -69,7 +77,6 @@ int Topology::new_vertex() {
     V.tris.resize(n * V.stride_t);
     V.wings.resize(n * V.stride_t);
   }
-  V.n_springs[v] = V.n_tris[v] = 0;
   return v;
 }
 
@@ -81,9 +88,19 @@ void Topology::free_vertex(int v) {
 }
 
 int Topology::new_edge(int a, int b, float l0) {
+  const int e = take_edge();
+  init_edge(e, a, b, l0);
+  return e;
+}
+
+int Topology::take_edge() {
   const int e = take_slot(E, E.a.size());
   if (e == int(E.a.size()))
     grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.hinge);
+  return e;
+}
+
+void Topology::init_edge(int e, int a, int b, float l0) {
   E.a[e] = a;
   E.b[e] = b;
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
@@ -93,7 +110,6 @@ int Topology::new_edge(int a, int b, float l0) {
   E.hinge[e] = Float4{};
   list_spring(a, e << 1, b);
   list_spring(b, (e << 1) | 1, a);
-  return e;
 }
 
 void Topology::free_edge(int e) {
@@ -109,13 +125,22 @@ void Topology::free_edge(int e) {
 }
 
 int Topology::new_triangle() {
+  const int t = take_triangle();
+  init_triangle(t);
+  return t;
+}
+
+int Topology::take_triangle() {
   const int t = take_slot(T, T.v0.size());
   if (t == int(T.v0.size())) grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
+  return t;
+}
+
+void Topology::init_triangle(int t) {
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 1;
   T.area[t] = Float4{};
-  return t;
 }
 
 void Topology::free_triangle(int t) {
@@ -124,6 +149,21 @@ void Topology::free_triangle(int t) {
   T.alive[t] = 0;
   T.area[t] = Float4{};
   T.free_ids.push_back(T.lid[t]);
+}
+
+int Topology::take_record() {
+  if (!free_records.empty()) {
+    const int id = free_records.back();
+    free_records.pop_back();
+    return id;
+  }
+  records.emplace_back();
+  return int(records.size()) - 1;
+}
+
+void Topology::make_room(int springs, int tris) {
+  while (V.stride_e < springs) widen(true);
+  while (V.stride_t < tris) widen(false);
 }
 
 int Topology::mesh_edge(int a, int b) const {

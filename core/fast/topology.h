@@ -126,10 +126,21 @@ class Topology {
   /// reallocating (growth past it is geometric, as for any vector).
   void reserve(std::size_t vertices, std::size_t edges, std::size_t triangles);
 
-  // Element edits take and return slots; the logical id follows the id policy.
+  // Element edits take and return slots; the logical id follows the id policy. new_X is
+  // take_X (allocates the id and slot: serial, in event order) then init_X (fills the slot and
+  // lists it: may run in parallel for elements of disjoint vertices).
   int new_vertex();
   int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
   int new_triangle();
+  int take_vertex();
+  int take_edge();
+  int take_triangle();
+  int take_record();  ///< a split record id (LIFO free list, else a new one)
+  void init_vertex(int v);
+  void init_edge(int e, int a, int b, float l0);
+  void init_triangle(int t);
+  /// Widens the adjacency strides until a list can hold this many springs / triangles.
+  void make_room(int springs, int tris);
   void free_vertex(int v);
   void free_edge(int e);  ///< unlists it from its endpoints
   void free_triangle(int t);
