@@ -18,7 +18,7 @@ constexpr int kReduceBlock = 8192; ///< fixed block of the deterministic reducti
 }  // namespace
 
 const char* to_string(Pass p) {
-  static const char* names[] = {"normals", "hinges", "gather", "integrate", "adapt_test", "topology_apply", "layout"};
+  static const char* names[] = {"normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply", "layout"};
   return names[int(p)];
 }
 
@@ -88,8 +88,8 @@ void FastSimulator::compute_normals() {
 void FastSimulator::compute_forces() {
   const StepConstants c = step_constants();
   {
-    PassTimer t(pass_seconds_, int(Pass::Hinges));
-    par_.run(topo_.E.size(), kGrain, [&](int b, int e) { hinge_forces(topo_, c, b, e); });
+    PassTimer t(pass_seconds_, int(Pass::EdgeForces));
+    par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); });
   }
   PassTimer t(pass_seconds_, int(Pass::Gather));
   par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); });
@@ -161,7 +161,7 @@ void FastSimulator::run_pass(Pass p) {
   const StepConstants c = step_constants();
   switch (p) {
     case Pass::Normals: compute_normals(); break;
-    case Pass::Hinges: par_.run(topo_.E.size(), kGrain, [&](int b, int e) { hinge_forces(topo_, c, b, e); }); break;
+    case Pass::EdgeForces: par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); }); break;
     case Pass::Gather: par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); }); break;
     case Pass::Integrate: integrate(); break;
     case Pass::AdaptTest: adapt_decide(); break;

@@ -62,22 +62,27 @@ void vertex_normals(Topology& m, int begin, int end) {
 }
 
 namespace {
-CRUMPLE_SCALAR_KERNEL void hinge_forces_body(const StepConstants& c, const std::int32_t* __restrict A,
-                       const std::int32_t* __restrict B, const std::int32_t* __restrict WL,
-                       const std::int32_t* __restrict WR, const float* __restrict msum,
-                       const std::uint8_t* __restrict flags, const float* __restrict x, const float* __restrict y,
-                       const float* __restrict z, const float* __restrict nx, const float* __restrict ny,
-                       const float* __restrict nz, Float4* __restrict hinge, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+                      const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
+                      const float* __restrict l0, const float* __restrict msum, const std::uint8_t* __restrict flags,
+                      const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                      const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
+                      const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                      EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
-    // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
-    if (!((flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0)) {
-      hinge[e] = Float4{};
-      continue;
-    }
-    const int a = A[e], b = B[e], l = WL[e], r = WR[e];
+    const int a = A[e], b = B[e];
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const float inv = lt > 0 ? 1.0f / lt : 0.0f;
+    // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
+    const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
+    const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
+    const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum[e] * inv;
+    const float kap = c.kappa * msum[e];
+    // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
+    const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
+    const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
     const float nrl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];
     const float Bmag = (1.0f - nrl) * lt * 0.5f;
     const float gx = (x[r] + nx[r]) - (x[l] + nx[l]), gy = (y[r] + ny[r]) - (y[l] + ny[l]),
@@ -85,67 +90,52 @@ CRUMPLE_SCALAR_KERNEL void hinge_forces_body(const StepConstants& c, const std::
     const float ox = x[r] - x[l], oy = y[r] - y[l], oz = z[r] - z[l];
     const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
     const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
-    const float k = sign * c.bend * msum[e] * Bmag;
+    const float k = hinge ? sign * c.bend * msum[e] * Bmag : 0.0f;
     // Mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l (removed in the balanced form).
-    hinge[e] = Float4{quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
-                      quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), k};
+    out[e] = EdgeOut{s * dx, s * dy, s * dz, kap, kap * dvx, kap * dvy, kap * dvz, k,
+                     quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
+                     quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), {0, 0, 0, 0, 0}};
   }
 }
 }  // namespace
 
-void hinge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  hinge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.msum.data(), m.E.flags.data(),
-                    m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(),
-                    m.E.hinge.data(), begin, end);
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
+  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.msum.data(),
+                   m.E.flags.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
+                   m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
 }
 
-CRUMPLE_SCALAR_KERNEL void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
+void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e, st = V.stride_t;
-  const Float4* __restrict hinge = m.E.hinge.data();
-  const float* __restrict l0 = m.E.l0.data();
-  const float *__restrict x = V.x.data(), *__restrict y = V.y.data(), *__restrict z = V.z.data();
-  const float *__restrict vx = V.vx.data(), *__restrict vy = V.vy.data(), *__restrict vz = V.vz.data();
-  const float* __restrict mass_of = V.m.data();
+  const EdgeOut* __restrict out = m.E.out.data();
   for (int v = begin; v < end; ++v) {
     float fx = 0, fy = 0, fz = 0, ks = 0, jx = 0, jy = 0, jz = 0, kn = 0, mx = 0, my = 0, mz = 0;
-    const float mass = mass_of[v];
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
-    const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      // The spring to u, evaluated from v's side: Hookean with kappa_e = kappa (m_v + m_u)
-      // [Eq 5] and damping along the axis (§2). Evaluated from u's side it gives exactly the
-      // opposite force (every difference changes sign exactly), so momentum pairs up.
-      const int e = springs[k] >> 1, u = nbrs[k];
-      const float dx = x[v] - x[u], dy = y[v] - y[u], dz = z[v] - z[u];
-      const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const float inv = lt > 0 ? 1.0f / lt : 0.0f;
-      const float dvx = vx[u] - vx[v], dvy = vy[u] - vy[v], dvz = vz[u] - vz[v];
-      const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
-      const float ms = mass + mass_of[u];
-      const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * ms * inv;
-      const float kap = c.kappa * ms;
-      fx += s * dx;
-      fy += s * dy;
-      fz += s * dz;
-      ks += kap;
-      jx += kap * dvx;  // kappa_e (v_u - v_v): the edge's part of (df/dx) v
-      jy += kap * dvy;
-      jz += kap * dvz;
-      const Float4& h = hinge[e];
-      kn -= h.w;  // hinge role: f = -k n_v - mean
-      mx += h.x;
-      my += h.y;
-      mz += h.z;
+      const EdgeOut& o = out[springs[k] >> 1];
+      const float sg = (springs[k] & 1) ? -1.0f : 1.0f;  // b receives the opposite of a
+      fx += sg * o.fx;
+      fy += sg * o.fy;
+      fz += sg * o.fz;
+      ks += o.kap;
+      jx += sg * o.jx;  // kappa_e (v_other - v_v)
+      jy += sg * o.jy;
+      jz += sg * o.jz;
+      kn -= o.kb;  // hinge role: f = -k n_v - mean
+      mx += o.bx;
+      my += o.by;
+      mz += o.bz;
     }
     const std::int32_t* wings = &V.wings[std::size_t(v) * st];
     for (int k = 0; k < V.n_tris[v]; ++k) {
-      const Float4& h = hinge[wings[k]];  // v is a wing of the edge opposite it
-      kn += h.w;  // wing role: f = +k n_v - mean
-      mx += h.x;
-      my += h.y;
-      mz += h.z;
+      const EdgeOut& o = out[wings[k]];  // v is a wing of the edge opposite it
+      kn += o.kb;  // wing role: f = +k n_v - mean
+      mx += o.bx;
+      my += o.by;
+      mz += o.bz;
     }
+    const float mass = V.m[v];
     fx += kn * V.nx[v] - mx;
     fy += kn * V.ny[v] - my;
     fz += kn * V.nz[v] - mz - mass * c.gravity;
@@ -157,11 +147,11 @@ CRUMPLE_SCALAR_KERNEL void gather_forces(Topology& m, const StepConstants& c, in
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
       const float inv = 1.0f / (mass + 2.0f * c.h2 * ks + dead);
-      V.g[v] = Float4{vx[v] + (c.h * fx + c.h2 * jx) * inv, vy[v] + (c.h * fy + c.h2 * jy) * inv,
-                      vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, mass};
+      V.g[v] = Float4{V.vx[v] + (c.h * fx + c.h2 * jx) * inv, V.vy[v] + (c.h * fy + c.h2 * jy) * inv,
+                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, mass};
     } else {
       const float inv = c.h / (mass + dead);
-      V.g[v] = Float4{vx[v] + fx * inv, vy[v] + fy * inv, vz[v] + fz * inv, mass};
+      V.g[v] = Float4{V.vx[v] + fx * inv, V.vy[v] + fy * inv, V.vz[v] + fz * inv, mass};
     }
   }
 }
@@ -254,41 +244,37 @@ void advance(Topology& m, const StepConstants& c, const float corr[3], const flo
 }
 
 namespace {
-// [Eq 6] per edge: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl) with c = 1 - lt/l0, made per step by
-// P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the edge's counter-based random number.
-// `exact_step`: h = h_ref, so P_step = P (no pow). Scalar with early exits: most edges are not
-// breakable mesh edges above the floor under compression, and those cost two loads and a
-// square root; the vectorized branch-free form had to gather every endpoint and wing normal of
-// every edge (measured 8.7 ms against this form's below at N = 256, fast/1, results/).
+// [Eq 6] for every edge, branch-free so that it vectorizes: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl)
+// with c = 1 - lt/l0, made per step by P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against
+// the edge's counter-based random number. `exact_step`: h = h_ref, so P_step = P (no pow).
 template <bool exact_step>
-CRUMPLE_SCALAR_KERNEL void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A,
-                                         const std::int32_t* __restrict B, const std::int32_t* __restrict WL,
-                                         const std::int32_t* __restrict WR, const float* __restrict l0,
-                                         const std::uint8_t* __restrict flags, const std::int32_t* __restrict lid,
-                                         const float* __restrict x, const float* __restrict y,
-                                         const float* __restrict z, const float* __restrict nx,
-                                         const float* __restrict ny, const float* __restrict nz,
-                                         std::uint8_t* __restrict out, int begin, int end) {
+void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+                   const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
+                   const float* __restrict l0, const std::uint8_t* __restrict flags,
+                   const std::int32_t* __restrict lid, const float* __restrict x,
+                   const float* __restrict y, const float* __restrict z, const float* __restrict nx,
+                   const float* __restrict ny, const float* __restrict nz, std::uint8_t* __restrict out,
+                   int begin, int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
+  CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
-    out[e] = 0;
-    if (flags[e] != (kAlive | kMesh | kBreakable) || !(l0[e] >= c.floor_length)) continue;
     const int a = A[e], b = B[e];
+    const int l = WL[e] & ~(WL[e] >> 31), r = WR[e] & ~(WR[e] >> 31);  // -1 -> 0, masked below
+    const bool two_wings = (WL[e] >= 0) & (WR[e] >= 0);
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (!(lt < l0[e])) continue;  // only compression breaks
     const float comp = 1.0f - lt / l0[e];
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
-    const int l = WL[e], r = WR[e];
-    const float nrl = (l >= 0 && r >= 0) ? nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l] : 1.0f;
+    const float nrl = two_wings ? nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l] : 1.0f;
     float P = 0.25f * comp * (1 - c.phi * nij) * (1 + c.phi * nrl);
-    P = P < 0.0f ? 0.0f : (P > 1.0f ? 1.0f : P);
+    P = std::fmin(std::fmax(P, 0.0f), 1.0f);
     const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - P, c.step_exponent);
-    // uniform(seed, step, id, Fracture) of model/random.h, its first two mixes hoisted; keyed by
-    // the logical id: the same stream whatever the slot order (layout.h).
+    // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
+    // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    out[e] = std::uint8_t((Pstep > 0) & (u < Pstep));
+    const bool can = (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
+    out[e] = std::uint8_t(can & (Pstep > 0) & (u < Pstep));
   }
 }
 }  // namespace

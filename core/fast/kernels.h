@@ -27,12 +27,11 @@ struct StepConstants {
 void triangle_areas(Topology& m, int begin, int end);
 /// n_v = normalized sum of the area vectors of v's triangles.                         §1
 void vertex_normals(Topology& m, int begin, int end);
-/// Per edge: the bending stencil [Eq 8-9] of a mesh edge with two wings, into E.hinge: the
-/// magnitude s C_beta B and, in the balanced form, the mean of its four forces.
-void hinge_forces(Topology& m, const StepConstants& c, int begin, int end);
-/// Per vertex: its springs (Hookean with kappa_e [Eq 5], damping), evaluated from its side,
-/// plus the bending of the hinges it is an endpoint or a wing of; writes f_v, sum kappa, and
-/// the first Jacobi guess (the predictor, §3) with m_v in w.
+/// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping) and the
+/// bending magnitude s C_beta B and balanced mean of its stencil [Eq 8-9].
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end);
+/// Per vertex: gathers f_v, sum kappa, and writes the first Jacobi guess (the predictor, §3)
+/// with m_v in w.
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
 /// One Jacobi sweep of the approximate implicit system: reads g, writes g_next.             §3
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);

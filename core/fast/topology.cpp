@@ -39,7 +39,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   V.nbrs.reserve(nv * V.stride_e);
   V.tris.reserve(nv * V.stride_t);
   V.wings.reserve(nv * V.stride_t);
-  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.hinge, E.lid, E.phys);
+  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
 }
 
@@ -96,7 +96,7 @@ int Topology::new_edge(int a, int b, float l0) {
 int Topology::take_edge() {
   const int e = take_slot(E, E.a.size());
   if (e == int(E.a.size()))
-    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.hinge);
+    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
   return e;
 }
 
@@ -107,7 +107,7 @@ void Topology::init_edge(int e, int a, int b, float l0) {
   E.l0[e] = l0;
   E.msum[e] = V.m[a] + V.m[b];
   E.flags[e] = kAlive | kMesh | kBreakable;
-  E.hinge[e] = Float4{};
+  E.out[e] = EdgeOut{};
   list_spring(a, e << 1, b);
   list_spring(b, (e << 1) | 1, a);
 }
@@ -120,7 +120,7 @@ void Topology::free_edge(int e) {
   E.l0[e] = 1;
   E.msum[e] = 0;
   E.flags[e] = 0;
-  E.hinge[e] = Float4{};
+  E.out[e] = EdgeOut{};
   E.free_ids.push_back(E.lid[e]);
 }
 

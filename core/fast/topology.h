@@ -49,6 +49,18 @@ struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
 };
 
+/// What the edge pass leaves for the vertex gather, packed so that one spring costs one cache
+/// line in the gather (the gather reads these at random, the edge pass writes them in order).
+/// 64 bytes: GCC vectorizes the edge pass's interleaved stores for 16 floats (not for 12).
+struct alignas(64) EdgeOut {
+  float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
+  float kap = 0;                 ///< kappa_e [Eq 5]
+  float jx = 0, jy = 0, jz = 0;  ///< kappa_e (v_b - v_a): the edge's part of (df/dx) v
+  float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
+  float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
+  float pad[5] = {};             ///< to 64 bytes
+};
+
 struct Vertices {
   // hot, per step (float: the fast backend's precision)
   Array<float> x, y, z;      ///< position x_k
@@ -87,9 +99,7 @@ struct Edges {
   Array<float> msum;             ///< m_a + m_b: kappa_e = kappa msum [Eq 5], C_beta,e = bend msum
   Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
-  Array<Float4> hinge;           ///< per step, from the hinge pass [Eq 8-9]: the bending
-                                 ///< magnitude k = s C_beta B in w and, in the balanced form, the
-                                 ///< mean of the stencil's four forces in x, y, z (0: no hinge)
+  Array<EdgeOut> out;            ///< per-step output of the edge pass
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
   std::vector<std::int32_t> phys;///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
