@@ -155,14 +155,24 @@ StepEvents FastSimulator::adapt_apply() {
   const int nv0 = m.V.size();
   if (vertex_stamp_.size() < std::size_t(nv0)) vertex_stamp_.resize(std::size_t(nv0), 0);
   const std::uint64_t split_mark = 3 * pass_, restored_mark = 3 * pass_ + 1, renewed_mark = 3 * pass_ + 2;
+  if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
+    for (int e : splits) {
+      if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
+      if (!split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(m.E.lid[e]), Draw::FlatSign)))) continue;
+      for (int t : m.records[m.E.record[e]].t) stamp(t);
+      ++ev.splits;
+    }
+  }
+  const std::vector<int> no_splits;
+  const std::vector<int>& round_splits = serial_splits_ ? no_splits : splits;
   std::vector<SplitPlan> plans;
   std::vector<int> round_of;
   round_last_.assign(std::size_t(nv0), 0);
   std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
   int rounds = 0, need_springs = 0, need_tris = 0;
-  for (std::size_t k = 0; k < splits.size(); ++k) {
-    if (k + kFar < splits.size()) prefetch_edge(m, splits[k + kFar]);
-    const int e = splits[k];
+  for (std::size_t k = 0; k < round_splits.size(); ++k) {
+    if (k + kFar < round_splits.size()) prefetch_edge(m, round_splits[k + kFar]);
+    const int e = round_splits[k];
     const int tL = m.E.tri0[e], tR = m.E.tri1[e];
     if (touched(tL) || touched(tR)) continue;
     const SplitPlan p = plan_split(e, float(uniform(params_.seed, steps_, std::uint32_t(m.E.lid[e]), Draw::FlatSign)));

@@ -74,6 +74,9 @@ class FastSimulator final : public Simulator {
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
   /// but for the last bits of the momentum correction (layout.h).
   void set_layout_fraction(double f) { layout_fraction_ = f; }
+  /// Test hook: apply a pass's splits one after the other instead of in parallel rounds (the
+  /// rounds must give the same result, bit for bit).
+  void set_serial_splits(bool on) { serial_splits_ = on; }
 
  private:
   StepConstants step_constants() const;
@@ -112,6 +115,7 @@ class FastSimulator final : public Simulator {
   std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
+  bool serial_splits_ = false;            ///< see set_serial_splits
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};
