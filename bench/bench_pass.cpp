@@ -7,8 +7,10 @@
 // step's earlier passes untimed so the timed pass sees the inputs it has inside a step, and times that pass alone
 // with steady_clock (manual time). Passes and their order come from Simulator::pass_names():
 // the reference computes springs and bending in separate loops; the fast backend fuses them in
-// one vectorized edge pass (edge_forces) followed by a per-vertex gather. `topology_apply` is the
-// whole adapt pass (its test and the serial splits and restores); `adapt_test` the test alone.
+// one edge pass (edge_forces) followed by a per-vertex gather. `topology_apply` is the whole
+// adapt pass (its test, the splits in parallel rounds and the serial restores); `adapt_test` the
+// test alone; `layout` one full relayout of the slots (docs/DECISIONS.md D12), which a step runs
+// only once the vertices created since the last one reach a quarter of the slots.
 #include <oneapi/tbb/global_control.h>
 
 #include <cmath>

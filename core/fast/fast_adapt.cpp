@@ -6,7 +6,6 @@
 #include <cstring>
 
 #include "fast/fast_sim.h"
-#include "fast/layout.h"
 #include "fast/pass_timer.h"
 #include "model/random.h"
 
@@ -298,10 +297,6 @@ StepEvents FastSimulator::adapt() {
   {
     PassTimer t(pass_seconds_, int(Pass::TopologyApply));
     ev = adapt_apply();
-  }
-  if (layout_stale(topo_, layout_fraction_)) {
-    PassTimer t(pass_seconds_, int(Pass::Layout));
-    relayout(topo_, par_, layout_scratch_);
   }
   return ev;
 }

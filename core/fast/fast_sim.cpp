@@ -141,6 +141,10 @@ StepEvents FastSimulator::step() {
   integrate();
   time_ += params_.h();
   const StepEvents ev = adapt();
+  if (layout_stale(topo_, layout_fraction_)) {
+    PassTimer t(pass_seconds_, int(Pass::Layout));
+    relayout(topo_, par_, layout_scratch_);
+  }
   ++steps_;
   return ev;
 }
