@@ -66,29 +66,28 @@ mkdir -p "$dest"
 json=$dest/frame.json
 
 # Every core: the benchmarks set their own TBB thread limit (1 or 2); taskset only makes sure
-# the process may use all of them.
-cmd=(taskset -c "0-$(($(nproc) - 1))" "$bin"
-     --benchmark_filter="$filter"
-     --benchmark_repetitions="$reps"
-     --benchmark_enable_random_interleaving=true
-     --benchmark_min_time="$min_time"
-     --benchmark_out="$json" --benchmark_out_format=json
-     "${extra[@]}")
+# the process may use all of them. bench_cmd BINARY FILTER OUT_JSON fills the array `cmd`.
+bench_cmd() {
+  cmd=(taskset -c "0-$(($(nproc) - 1))" "$1"
+       --benchmark_filter="$2"
+       --benchmark_repetitions="$reps"
+       --benchmark_enable_random_interleaving=true
+       --benchmark_min_time="$min_time"
+       --benchmark_out="$3" --benchmark_out_format=json
+       "${extra[@]}")
+}
+bench_cmd "$bin" "$filter" "$json"
+main_cmd=("${cmd[@]}")
 echo "bench.sh: ${cmd[*]}"
 start=$(date +%s)
 "${cmd[@]}"
 # The no-SIMD fast backend on one thread (its gain is a per-core question), N <= 512.
 nosimd_json=$dest/nosimd.json
-nosimd_cmd=(taskset -c "0-$(($(nproc) - 1))" "$nosimd_bin"
-     --benchmark_filter="fast-nosimd/1/(32|64|128|256|512)/"
-     --benchmark_repetitions="$reps"
-     --benchmark_enable_random_interleaving=true
-     --benchmark_min_time="$min_time"
-     --benchmark_out="$nosimd_json" --benchmark_out_format=json
-     "${extra[@]}")
-if ((quick)); then nosimd_cmd[2]="--benchmark_filter=fast-nosimd/1/(32|64|128|256)/"; fi
-echo "bench.sh: ${nosimd_cmd[*]}"
-"${nosimd_cmd[@]}"
+nosimd_sizes='32|64|128|256|512'
+if ((quick)); then nosimd_sizes='32|64|128|256'; fi
+bench_cmd "$nosimd_bin" "fast-nosimd/1/($nosimd_sizes)/" "$nosimd_json"
+echo "bench.sh: ${cmd[*]}"
+"${cmd[@]}"
 "$py" - "$json" "$nosimd_json" <<'PY'
 import json, sys
 main, extra = sys.argv[1:]
@@ -101,7 +100,7 @@ elapsed=$(($(date +%s) - start))
 
 "$py" "$root/scripts/machine_info.py" --json > "$dest/machine.json"
 "$py" - "$dest/run.json" "$dest/machine.json" "$elapsed" "$quick" "$reps" "$min_time" "$filter" \
-      "$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)" "${cmd[*]}" <<'PY'
+      "$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)" "${main_cmd[*]}" <<'PY'
 import json, sys, datetime
 out, machine, elapsed, quick, reps, min_time, flt, rev, cmd = sys.argv[1:]
 with open(machine) as f:

@@ -21,8 +21,29 @@ struct AlignedAllocator {
   bool operator==(const AlignedAllocator<U>&) const { return true; }
 };
 
-/// One attribute of the SoA state.
+/// One attribute of the SoA state. A copy keeps the room reserved in the original (a plain
+/// vector copy would not), so a clone of a simulator appends without reallocating, as the
+/// original does: the benchmarks time frames of clones.
 template <class T>
-using Array = std::vector<T, AlignedAllocator<T>>;
+class Array : public std::vector<T, AlignedAllocator<T>> {
+  using Base = std::vector<T, AlignedAllocator<T>>;
+
+ public:
+  using Base::Base;
+  Array() = default;
+  Array(const Array& o) : Base() {
+    this->reserve(o.capacity());
+    this->assign(o.begin(), o.end());
+  }
+  Array& operator=(const Array& o) {
+    if (this != &o) {
+      if (this->capacity() < o.capacity()) this->reserve(o.capacity());
+      this->assign(o.begin(), o.end());
+    }
+    return *this;
+  }
+  Array(Array&&) noexcept = default;
+  Array& operator=(Array&&) noexcept = default;
+};
 
 }  // namespace crumple::fast

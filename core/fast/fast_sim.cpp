@@ -59,14 +59,6 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   topo_.euler = topo_.live_vertices() - topo_.live_mesh_edges() + topo_.live_triangles();
 }
 
-FastSimulator::FastSimulator(const FastSimulator& o)
-    : params_(o.params_), scene_(o.scene_), par_(o.par_), topo_(o.topo_), time_(o.time_), steps_(o.steps_),
-      decisions_(o.decisions_), tri_stamp_(o.tri_stamp_), vertex_stamp_(o.vertex_stamp_), round_last_(o.round_last_), pass_(o.pass_), layout_fraction_(o.layout_fraction_), serial_splits_(o.serial_splits_),
-      layout_scratch_(o.layout_scratch_), normals_valid_(o.normals_valid_),
-      pass_seconds_(o.pass_seconds_) {
-  topo_.reserve(o.topo_.V.m.capacity(), o.topo_.E.a.capacity(), o.topo_.T.v0.capacity());
-}
-
 StepConstants FastSimulator::step_constants() const {
   StepConstants c;
   c.h = float(params_.h());
