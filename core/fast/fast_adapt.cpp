@@ -213,8 +213,10 @@ StepEvents FastSimulator::adapt_apply() {
     for (std::size_t k = 0; k < plans.size(); ++k) by_round[fill[round_of[k]]++] = int(k);
   }
   std::vector<std::uint8_t> applied(plans.size(), 0);
+  constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
   for (int r = 1; r <= rounds; ++r) {
-    par_.run(start[r + 1] - start[r], 8, [&](int b, int e) {
+    large_rounds_ += start[r + 1] - start[r] > kRoundGrain;
+    par_.run(start[r + 1] - start[r], kRoundGrain, [&](int b, int e) {
       for (int k = start[r] + b; k < start[r] + e; ++k) {
         if (k + kNear < start[r] + e) prefetch_split(m, plans[by_round[k + kNear]].e);
         applied[by_round[k]] = apply_split(plans[by_round[k]]);
@@ -228,7 +230,7 @@ StepEvents FastSimulator::adapt_apply() {
     vertex_stamp_[p.n] = split_mark;
     involved.push_back(p.n);
   }
-  par_.run(int(involved.size()), 64, [&](int b, int e) {
+  par_.run(int(involved.size()), 256, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       const int v = involved[k];
       const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
@@ -245,7 +247,7 @@ StepEvents FastSimulator::adapt_apply() {
   // both involve (edges and triangles of a restore join its own vertices), so a candidate is
   // re-checked, in order, only when an earlier restore touched one of its vertices.
   std::vector<std::uint8_t> restorable(restores.size());
-  par_.run(int(restores.size()), 32, [&](int b, int e) {
+  par_.run(int(restores.size()), 128, [&](int b, int e) {
     for (int k = b; k < e; ++k) restorable[k] = can_restore(restores[k]);
   });
   if (vertex_stamp_.size() < std::size_t(m.V.size())) vertex_stamp_.resize(std::size_t(m.V.size()), 0);

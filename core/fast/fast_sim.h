@@ -77,6 +77,8 @@ class FastSimulator final : public Simulator {
   /// Test hook: apply a pass's splits one after the other instead of in parallel rounds (the
   /// rounds must give the same result, bit for bit).
   void set_serial_splits(bool on) { serial_splits_ = on; }
+  /// Split rounds so far large enough to run as a parallel loop (tests check they happened).
+  std::uint64_t large_rounds() const { return large_rounds_; }
 
  private:
   StepConstants step_constants() const;
@@ -116,6 +118,7 @@ class FastSimulator final : public Simulator {
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_splits_ = false;            ///< see set_serial_splits
+  std::uint64_t large_rounds_ = 0;        ///< see large_rounds
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};

@@ -128,11 +128,14 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
 TEST(FastTopology, ParallelSplitRoundsEqualSerialSplits) {
   Params p;
   for (int threads : {1, 2}) {
+    std::uint64_t large_rounds = 0;
     auto run = [&](bool serial, std::vector<StepEvents>& events) {  // one simulator at a time
-      fast::FastSimulator sim(make_grid(24), p, threads);
+      // 48 x 48: some rounds of over 64 splits, which run as parallel loops (smaller ones inline).
+      fast::FastSimulator sim(make_grid(48), p, threads);
       sim.set_serial_splits(serial);
-      for (int f = 0; f < 90; ++f) events.push_back(sim.step());
+      for (int f = 0; f < 75; ++f) events.push_back(sim.step());
       EXPECT_EQ(sim.check_topology(), "");
+      if (!serial) large_rounds = sim.large_rounds();
       return sim.snapshot();
     };
     std::vector<StepEvents> ea, eb;
@@ -143,7 +146,8 @@ TEST(FastTopology, ParallelSplitRoundsEqualSerialSplits) {
       ASSERT_EQ(ea[f].restores, eb[f].restores) << "frame " << f;
       splits += ea[f].splits;
     }
-    EXPECT_GT(splits, 800);
+    EXPECT_GT(splits, 2000);
+    EXPECT_GT(large_rounds, 10u);  // the parallel path did run
     EXPECT_TRUE(same_snapshot(rounds, serial)) << threads << " threads";
   }
 }
