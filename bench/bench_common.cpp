@@ -4,14 +4,14 @@
 
 namespace crumple::bench {
 
-int frames_per_iteration(int n) {
-  // Several frames per batch where frames are short, so one iteration's time averages over the
-  // frame-to-frame variation of the crumple (splits come in bursts) and over timer and
-  // scheduling granularity; few enough that the timed frames stay close to the prepared point.
-  if (n <= 64) return 8;
-  if (n <= 128) return 4;
-  if (n <= 256) return 2;
-  return 1;
+int frames_per_iteration(int /*n*/) {
+  // Eight frames per batch at every size: one iteration's time averages over the frame-to-frame
+  // variation of the crumple (splits come in bursts) and includes the fast backend's relayout
+  // (docs/DECISIONS.md D12) about as often as a continuing run does (once every 8-11 frames at the
+  // prepared point); few enough that the timed frames stay close to the prepared point
+  // (8 of the 120 frames of the squeeze). Never adapted to the measured speed, so every backend,
+  // thread count and revision times exactly the same frames.
+  return 8;
 }
 
 void FrameTally::set_counters(benchmark::State& state, double vertices, double edges) const {

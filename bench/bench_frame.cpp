@@ -27,10 +27,10 @@
 //     process CPU clock (a system call, ~1 us) inside the timed interval, a few per cent of
 //     the fast backend's sub-100 us frames at N = 32; manual timing costs two vDSO clock
 //     reads (~20 ns) per batch.
-//   * A batch of frames_per_iteration(N) frames is timed per iteration (8 at N <= 64, down to
-//     1 at N >= 512) and divided, so each iteration's time is the mean frame time of a fixed
-//     stretch of the crumple; the batch is fixed per N so that every backend, thread count
-//     and revision times the same frames.
+//   * A batch of frames_per_iteration(N) frames (8) is timed per iteration and divided, so each
+//     iteration's time is the mean frame time of a fixed stretch of the crumple, long enough
+//     to hold the fast backend's occasional relayout at its usual rate; the batch is fixed so
+//     that every backend, thread count and revision times the same frames.
 //   * The reported cpu_time is not meaningful (it includes the untimed clone and warm-up, on
 //     the main thread only); use real_time, which is the manual time.
 // Threads: tbb::global_control(max_allowed_parallelism, T) for the whole benchmark function,
