@@ -246,10 +246,13 @@ StepEvents FastSimulator::adapt_apply() {
   // earlier restore of this pass can change a later candidate's answer only through a vertex
   // both involve (edges and triangles of a restore join its own vertices), so a candidate is
   // re-checked, in order, only when an earlier restore touched one of its vertices.
-  std::vector<std::uint8_t> restorable(restores.size());
-  par_.run(int(restores.size()), 128, [&](int b, int e) {
-    for (int k = b; k < e; ++k) restorable[k] = can_restore(restores[k]);
-  });
+  // (On one thread the pre-test only adds a pass over the candidates: they are tested inline.)
+  const bool pretest = par_.threads() > 1;
+  std::vector<std::uint8_t> restorable(pretest ? restores.size() : 0);
+  if (pretest)
+    par_.run(int(restores.size()), 128, [&](int b, int e) {
+      for (int k = b; k < e; ++k) restorable[k] = can_restore(restores[k]);
+    });
   if (vertex_stamp_.size() < std::size_t(m.V.size())) vertex_stamp_.resize(std::size_t(m.V.size()), 0);
   for (std::size_t k = 0; k < restores.size(); ++k) {
     if (k + 2 * kFar < restores.size()) prefetch_edge(m, restores[k + 2 * kFar]);
@@ -261,7 +264,7 @@ StepEvents FastSimulator::adapt_apply() {
     if (std::any_of(t.begin(), t.end(), touched)) continue;
     bool near_earlier = vertex_stamp_[r.n] == restored_mark;
     for (int v : r.k) near_earlier |= v >= 0 && vertex_stamp_[v] == restored_mark;
-    if (!(near_earlier ? can_restore(e) : restorable[k])) continue;
+    if (!(near_earlier || !pretest ? can_restore(e) : restorable[k])) continue;
     const std::array<int, 5> verts{r.n, r.k[0], r.k[1], r.k[2], r.k[3]};
     restore_edge(e);
     for (int v : verts)
