@@ -167,6 +167,7 @@ StepEvents FastSimulator::adapt_apply() {
   std::vector<SplitPlan> plans;
   std::vector<int> round_of;
   round_last_.assign(std::size_t(nv0), 0);
+  split_vertex_.resize(std::size_t(nv0), 0);  // all 0 between passes (reset below)
   std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
   int rounds = 0, need_springs = 0, need_tris = 0;
   for (std::size_t k = 0; k < round_splits.size(); ++k) {
@@ -185,22 +186,28 @@ StepEvents FastSimulator::adapt_apply() {
       if (v < 0) continue;
       round_last_[v] = round;
       if (vertex_stamp_[v] != split_mark) vertex_stamp_[v] = split_mark, involved.push_back(v);
+      split_vertex_[v] = 1;
     }
     rounds = std::max(rounds, round);
     for (int t : {tL, tR, p.tris[0], p.tris[1]}) stamp(t);
     plans.push_back(p);
     round_of.push_back(round);
   }
-  // Room in the adjacency lists for every append (a split adds at most one spring and one
-  // triangle to each of i, j, l, r), so that no list widens while rounds run.
+  // Room in the adjacency lists for every append, so that no list widens while rounds run: a
+  // split adds one spring at each of i, j, l, r and, net, one triangle at l and at r (i and j
+  // lose their two triangles before they gain two). Exact, so strides widen when the serial
+  // order would have widened them, not earlier (a wider stride slows every gather).
   {
-    std::vector<int> adds(std::size_t(nv0), 0);
-    for (const SplitPlan& p : plans)
+    std::vector<int> spring_adds(std::size_t(nv0), 0), tri_adds(std::size_t(nv0), 0);
+    for (const SplitPlan& p : plans) {
       for (int v : {m.E.a[p.e], m.E.b[p.e], m.E.wl[p.e], m.E.wr[p.e]})
-        if (v >= 0) ++adds[v];
+        if (v >= 0) ++spring_adds[v];
+      for (int v : {m.E.wl[p.e], m.E.wr[p.e]})
+        if (v >= 0) ++tri_adds[v];
+    }
     for (int v : involved) {
-      need_springs = std::max(need_springs, m.V.n_springs[v] + adds[v]);
-      need_tris = std::max(need_tris, m.V.n_tris[v] + adds[v]);
+      need_springs = std::max(need_springs, m.V.n_springs[v] + spring_adds[v]);
+      need_tris = std::max(need_tris, m.V.n_tris[v] + tri_adds[v]);
     }
     topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
   }
@@ -212,35 +219,45 @@ StepEvents FastSimulator::adapt_apply() {
     std::vector<int> fill(start.begin(), start.end());
     for (std::size_t k = 0; k < plans.size(); ++k) by_round[fill[round_of[k]]++] = int(k);
   }
+  // msum [Eq 5] of a split's springs is renewed in its round, from the masses as they are then,
+  // except for springs to a vertex of another split of the pass (whose mass another round may
+  // change): those wait for the end. A spring between two vertices of this split, or to a
+  // vertex no split touches, belongs to this split alone in its round; if a later split
+  // changes one of its ends, that split renews it again.
+  split_vertex_.resize(std::size_t(m.V.size()), 0);
   std::vector<std::uint8_t> applied(plans.size(), 0);
+  std::vector<std::vector<int>> deferred(plans.size());
+  auto renew_msum = [&](const SplitPlan& p, std::vector<int>& later) {
+    const SplitRecord& rec = m.records[p.record];
+    const int own[5] = {rec.k[0], rec.k[1], rec.k[2], rec.k[3], p.n};
+    for (int v : own) {
+      if (v < 0) continue;
+      const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
+      for (int q = 0; q < m.V.n_springs[v]; ++q) {
+        const int u = nb[q];
+        if (split_vertex_[u] && std::find(own, own + 5, u) == own + 5) {
+          later.push_back(sp[q] >> 1);
+          continue;
+        }
+        topo_.E.msum[sp[q] >> 1] = (sp[q] & 1) ? m.V.m[u] + m.V.m[v] : m.V.m[v] + m.V.m[u];
+      }
+    }
+  };
   constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start[r + 1] - start[r] > kRoundGrain;
     par_.run(start[r + 1] - start[r], kRoundGrain, [&](int b, int e) {
       for (int k = start[r] + b; k < start[r] + e; ++k) {
         if (k + kNear < start[r] + e) prefetch_split(m, plans[by_round[k + kNear]].e);
-        applied[by_round[k]] = apply_split(plans[by_round[k]]);
+        const int i = by_round[k];
+        applied[i] = apply_split(plans[i]);
+        renew_msum(plans[i], deferred[i]);
       }
     });
   }
-  // msum of every spring at a touched vertex, from its final masses: each edge written once,
-  // by its endpoint a if that was touched, else by b.
-  for (const SplitPlan& p : plans) {
-    vertex_stamp_.resize(std::max(vertex_stamp_.size(), std::size_t(p.n) + 1), 0);
-    vertex_stamp_[p.n] = split_mark;
-    involved.push_back(p.n);
-  }
-  par_.run(int(involved.size()), 256, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      const int v = involved[k];
-      const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
-      for (int q = 0; q < m.V.n_springs[v]; ++q) {
-        const bool is_b = sp[q] & 1;
-        if (is_b && vertex_stamp_[nb[q]] == split_mark) continue;  // a writes it
-        topo_.E.msum[sp[q] >> 1] = is_b ? m.V.m[nb[q]] + m.V.m[v] : m.V.m[v] + m.V.m[nb[q]];
-      }
-    }
-  });
+  for (const std::vector<int>& later : deferred)  // few: springs between neighbouring splits
+    for (int e : later) topo_.E.msum[e] = m.V.m[m.E.a[e]] + m.V.m[m.E.b[e]];
+  for (int v : involved) split_vertex_[v] = 0;
   for (std::uint8_t a : applied) ev.splits += a;
   // Restores: can_restore of every candidate in parallel on the state after the splits. An
   // earlier restore of this pass can change a later candidate's answer only through a vertex
