@@ -149,8 +149,8 @@ StepEvents FastSimulator::adapt_apply() {
   // apply in rounds: a split's round is one more than the last round of an earlier split
   // sharing one of its vertices, so the splits of a round have disjoint vertex sets (hence
   // disjoint edges, triangles and adjacency lists) and run in parallel, while every vertex
-  // still receives its edits in event order: the result is the serial one, bit for bit. msum
-  // [Eq 5] of the springs at touched vertices is renewed once at the end.
+  // still receives its edits in event order: the result is the serial one, bit for bit
+  // (docs/DECISIONS.md D13).
   const int nv0 = m.V.size();
   if (vertex_stamp_.size() < std::size_t(nv0)) vertex_stamp_.resize(std::size_t(nv0), 0);
   const std::uint64_t split_mark = 3 * pass_, restored_mark = 3 * pass_ + 1, renewed_mark = 3 * pass_ + 2;
