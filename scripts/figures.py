@@ -546,6 +546,12 @@ def main(argv=None):
             for v, (lab, args, *_), (s, runs) in zip(values, settings, res)],
             "verdict": verdict}
 
+    def draw(png, title, pname, values, settings, res, metric, metric_label, extras, **kw):
+        """sweep_figure of one sweep: labels, summaries and runs come from settings and res."""
+        sweep_figure(os.path.join(a.out, png), title, pname, values, [lab for lab, *_ in settings],
+                     [s for s, _ in res], [runs for _, runs in res], metric, metric_label,
+                     extras, **kw)
+
     if "fig10" in only:
         vals = [0.0, 0.5, 0.75, 1.0]
         st = [(f"phi = {v:g}", ["--phi", f"{v:g}", "--psi", "0.25"]) for v in vals]
@@ -558,11 +564,11 @@ def main(argv=None):
                    "held": tr == "monotonic",
                    "phi0_vs_phi1_separated": separated(sm[0]["splits"], sm[-1]["splits"])}
         record("fig10", "phi", vals, st, res, verdict)
-        sweep_figure(os.path.join(a.out, "fig10_phi.png"),
-                     f"Fig 10: phi sweep (psi = 0.25), grid {a.grid}, {a.frames} frames, "
-                     f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
-                     "phi", vals, [l for l, _ in st], sm, [runs for _, runs in res],
-                     "splits", "total splits", [("rms", "rms", 3)])
+        draw("fig10_phi.png",
+             f"Fig 10: phi sweep (psi = 0.25), grid {a.grid}, {a.frames} frames, "
+             f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
+             "phi", vals, st, res,
+             "splits", "total splits", [("rms", "rms", 3)])
         print(f"fig10 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
     if "fig11" in only:
@@ -585,13 +591,13 @@ def main(argv=None):
                    "psi0_vs_psi1_separated": separated(sm[0]["rebreak_frac"],
                                                        sm[-1]["rebreak_frac"])}
         record("fig11", "psi", vals, st, res, verdict)
-        sweep_figure(os.path.join(a.out, "fig11_psi.png"),
-                     f"Fig 11: psi sweep (phi = 0.25), grid {a.grid}, {a.frames} frames, "
-                     f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
-                     "psi", vals, [l for l, _ in st], sm, [runs for _, runs in res],
-                     "rebreak_frac", "re-broken share of held springs",
-                     [("rebreaks", "re-breaks", 0), ("rebreak_frac", "re-brk %", 3),
-                      ("late_rate", "late/frm", 1)])
+        draw("fig11_psi.png",
+             f"Fig 11: psi sweep (phi = 0.25), grid {a.grid}, {a.frames} frames, "
+             f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
+             "psi", vals, st, res,
+             "rebreak_frac", "re-broken share of held springs",
+             [("rebreaks", "re-breaks", 0), ("rebreak_frac", "re-brk %", 3),
+              ("late_rate", "late/frm", 1)])
         print(f"fig11 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
     if "fig12" in only:
@@ -611,11 +617,11 @@ def main(argv=None):
                    "more_crease_at_large_eps": cr[1] > cr[0],
                    "held": rs[0] > rs[1] and hd[1] > hd[0]}
         record("fig12", "epsilon", vals, st, res, verdict)
-        sweep_figure(os.path.join(a.out, "fig12_epsilon.png"),
-                     f"Fig 12: epsilon (restoration threshold), grid {a.grid}, {a.frames} "
-                     f"frames, seed 1 shown, mean ± s.d. over {len(seeds)} seeds",
-                     "epsilon", vals, [l for l, _ in st], sm, [runs for _, runs in res],
-                     "restores", "total restores", [("held", "held", 0)])
+        draw("fig12_epsilon.png",
+             f"Fig 12: epsilon (restoration threshold), grid {a.grid}, {a.frames} "
+             f"frames, seed 1 shown, mean ± s.d. over {len(seeds)} seeds",
+             "epsilon", vals, st, res,
+             "restores", "total restores", [("held", "held", 0)])
         print(f"fig12 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
     if "fig6" in only:
@@ -644,12 +650,11 @@ def main(argv=None):
                {"question": "are the fracture counts converged in the time step?",
                 "splits_means": [s["splits"]["mean"] for s in sm],
                 "aspect_means": [s["aspect"]["mean"] for s in sm]})
-        sweep_figure(os.path.join(a.out, "diag_substeps.png"),
-                     f"Diagnostic: time step (h = 1/60 s / substeps), model defaults, grid "
-                     f"{a.grid}, {a.frames} frames, {len(dseeds)} seeds",
-                     "substeps", [1, 2, 4, 8], [l for l, _ in st], sm,
-                     [runs for _, runs in res], "splits", "total splits",
-                     [("aspect", "aspect", 2), ("wall_s", "wall s", 1)])
+        draw("diag_substeps.png",
+             f"Diagnostic: time step (h = 1/60 s / substeps), model defaults, grid "
+             f"{a.grid}, {a.frames} frames, {len(dseeds)} seeds",
+             "substeps", [1, 2, 4, 8], st, res, "splits", "total splits",
+             [("aspect", "aspect", 2), ("wall_s", "wall s", 1)])
         st = [("flat grid", [], 0.0), ("bump 0.01", [], 0.01), ("bump 0.03", [], 0.03),
               ("bump 0.03, substeps 4", ["--substeps", "4"], 0.03)]
         res = sweep("diag_flat", st, dseeds)
@@ -658,13 +663,12 @@ def main(argv=None):
                res, {"question": "does a flat sheet stay a flat disk in the sphere?",
                      "aspect_means": [s["aspect"]["mean"] for s in sm],
                      "splits_means": [s["splits"]["mean"] for s in sm]})
-        sweep_figure(os.path.join(a.out, "diag_flat.png"),
-                     f"Diagnostic: flat sheet vs a smooth out-of-plane bump (max |z| in sheet "
-                     f"widths), model defaults, grid {a.grid}, {len(dseeds)} seeds, side view",
-                     "", [0, 1, 2, 3], [l for l, *_ in st], sm,
-                     [runs for _, runs in res], "aspect", "aspect (thickness / width)",
-                     [("aspect", "aspect", 2), ("rms", "rms", 3)], elev=10.0,
-                     xticklabels=["flat", "0.01", "0.03", "0.03\nsubst. 4"])
+        draw("diag_flat.png",
+             f"Diagnostic: flat sheet vs a smooth out-of-plane bump (max |z| in sheet "
+             f"widths), model defaults, grid {a.grid}, {len(dseeds)} seeds, side view",
+             "", [0, 1, 2, 3], st, res, "aspect", "aspect (thickness / width)",
+             [("aspect", "aspect", 2), ("rms", "rms", 3)], elev=10.0,
+             xticklabels=["flat", "0.01", "0.03", "0.03\nsubst. 4"])
         print(f"diagnostics done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
     if "woody" in only:

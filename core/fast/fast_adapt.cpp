@@ -152,8 +152,7 @@ StepEvents FastSimulator::adapt_apply() {
   // still receives its edits in event order: the result is the serial one, bit for bit
   // (docs/DECISIONS.md D13).
   const int nv0 = m.V.size();
-  if (vertex_stamp_.size() < std::size_t(nv0)) vertex_stamp_.resize(std::size_t(nv0), 0);
-  const std::uint64_t split_mark = 3 * pass_, restored_mark = 3 * pass_ + 1, renewed_mark = 3 * pass_ + 2;
+  const std::uint64_t restored_mark = 2 * pass_, renewed_mark = 2 * pass_ + 1;
   if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
     for (int e : splits) {
       if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
@@ -185,8 +184,7 @@ StepEvents FastSimulator::adapt_apply() {
     for (int v : ends) {
       if (v < 0) continue;
       round_last_[v] = round;
-      if (vertex_stamp_[v] != split_mark) vertex_stamp_[v] = split_mark, involved.push_back(v);
-      split_vertex_[v] = 1;
+      if (!split_vertex_[v]) split_vertex_[v] = 1, involved.push_back(v);
     }
     rounds = std::max(rounds, round);
     for (int t : {tL, tR, p.tris[0], p.tris[1]}) stamp(t);

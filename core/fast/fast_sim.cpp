@@ -5,7 +5,6 @@
 #include <map>
 #include <stdexcept>
 
-#include "fast/layout.h"
 #include "fast/pass_timer.h"
 #include "model/random.h"
 

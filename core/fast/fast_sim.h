@@ -117,7 +117,7 @@ class FastSimulator final : public Simulator {
   std::uint64_t steps_ = 0;
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
-  std::vector<std::uint64_t> vertex_stamp_;  ///< 3 x pass + what the pass did to each vertex
+  std::vector<std::uint64_t> vertex_stamp_;  ///< 2 x pass + 0 (restored) or 1 (normal renewed)
   std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
   std::vector<std::uint8_t> split_vertex_;  ///< per vertex: 1 while a split of the pass involves it
   std::uint64_t pass_ = 0;                ///< topology passes so far
