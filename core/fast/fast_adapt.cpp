@@ -165,12 +165,21 @@ StepEvents FastSimulator::adapt_apply() {
   const std::vector<int>& round_splits = serial_splits_ ? no_splits : splits;
   std::vector<SplitPlan> plans;
   std::vector<int> round_of;
-  round_last_.assign(std::size_t(nv0), 0);
-  split_vertex_.resize(std::size_t(nv0), 0);  // all 0 between passes (reset below)
+  // Per-vertex scratch, all 0 between passes (reset below for the vertices used): no pass
+  // clears or allocates an array the size of the mesh.
+  for (std::vector<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(nv0), 0);
+  split_vertex_.resize(std::size_t(nv0), 0);
   std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
   int rounds = 0, need_springs = 0, need_tris = 0;
   for (std::size_t k = 0; k < round_splits.size(); ++k) {
     if (k + kFar < round_splits.size()) prefetch_edge(m, round_splits[k + kFar]);
+    if (k + kNear < round_splits.size()) {  // its edge's lines are cached by now
+      const int f = round_splits[k + kNear];
+      for (int t : {m.E.tri0[f], m.E.tri1[f]})
+        if (t >= 0 && t < int(tri_stamp_.size())) prefetch(&tri_stamp_[t]);
+      for (int v : {m.E.a[f], m.E.b[f], m.E.wl[f], m.E.wr[f]})
+        if (v >= 0) prefetch(&round_last_[v]), prefetch(&split_vertex_[v]);
+    }
     const int e = round_splits[k];
     const int tL = m.E.tri0[e], tR = m.E.tri1[e];
     if (touched(tL) || touched(tR)) continue;
@@ -191,24 +200,23 @@ StepEvents FastSimulator::adapt_apply() {
     plans.push_back(p);
     round_of.push_back(round);
   }
+  topo_.fit();  // the slots plan_split took
   // Room in the adjacency lists for every append, so that no list widens while rounds run: a
   // split adds one spring at each of i, j, l, r and, net, one triangle at l and at r (i and j
   // lose their two triangles before they gain two). Exact, so strides widen when the serial
   // order would have widened them, not earlier (a wider stride slows every gather).
-  {
-    std::vector<int> spring_adds(std::size_t(nv0), 0), tri_adds(std::size_t(nv0), 0);
-    for (const SplitPlan& p : plans) {
-      for (int v : {m.E.a[p.e], m.E.b[p.e], m.E.wl[p.e], m.E.wr[p.e]})
-        if (v >= 0) ++spring_adds[v];
-      for (int v : {m.E.wl[p.e], m.E.wr[p.e]})
-        if (v >= 0) ++tri_adds[v];
-    }
-    for (int v : involved) {
-      need_springs = std::max(need_springs, m.V.n_springs[v] + spring_adds[v]);
-      need_tris = std::max(need_tris, m.V.n_tris[v] + tri_adds[v]);
-    }
-    topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
+  for (const SplitPlan& p : plans) {
+    for (int v : {m.E.a[p.e], m.E.b[p.e], m.E.wl[p.e], m.E.wr[p.e]})
+      if (v >= 0) ++spring_adds_[v];
+    for (int v : {m.E.wl[p.e], m.E.wr[p.e]})
+      if (v >= 0) ++tri_adds_[v];
   }
+  for (int v : involved) {
+    need_springs = std::max(need_springs, m.V.n_springs[v] + spring_adds_[v]);
+    need_tris = std::max(need_tris, m.V.n_tris[v] + tri_adds_[v]);
+    round_last_[v] = spring_adds_[v] = tri_adds_[v] = 0;
+  }
+  topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
   // The rounds, each a parallel loop over its splits (in event order within the round).
   std::vector<int> by_round(plans.size()), start(std::size_t(rounds) + 2, 0);
   for (int r : round_of) ++start[r + 1];
@@ -342,6 +350,7 @@ FastSimulator::SplitPlan FastSimulator::plan_split(int e, float flat_draw) {
 bool FastSimulator::split_edge(int e, float flat_draw) {
   const SplitPlan p = plan_split(e, flat_draw);
   if (p.e < 0) return false;
+  topo_.fit();
   const bool ok = apply_split(p);
   update_split_msum(p);
   return ok;

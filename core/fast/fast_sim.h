@@ -119,6 +119,8 @@ class FastSimulator final : public Simulator {
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::vector<std::uint64_t> vertex_stamp_;  ///< 2 x pass + 0 (restored) or 1 (normal renewed)
   std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
+  std::vector<int> spring_adds_;          ///< per vertex: springs the splits of this pass add
+  std::vector<int> tri_adds_;             ///< per vertex: triangles the splits of this pass add
   std::vector<std::uint8_t> split_vertex_;  ///< per vertex: 1 while a split of the pass involves it
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction

@@ -60,24 +60,32 @@ int take_slot(Kind& k, std::size_t size) {
 
 int Topology::new_vertex() {
   const int v = take_vertex();
+  fit();
   init_vertex(v);
   return v;
 }
 
 void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
 
-int Topology::take_vertex() {
-  const int v = take_slot(V, V.m.size());
-  if (v == int(V.m.size())) {
-    const std::size_t n = std::size_t(v) + 1;
-    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum,
-         V.g, V.g_next, V.rx, V.ry, V.rz, V.n_springs, V.n_tris);
+int Topology::take_vertex() { return take_slot(V, V.lid.size()); }
+
+int Topology::take_edge() { return take_slot(E, E.lid.size()); }
+
+int Topology::take_triangle() { return take_slot(T, T.lid.size()); }
+
+void Topology::fit() {
+  if (const std::size_t n = V.lid.size(); n != V.m.size()) {
+    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.rx,
+         V.ry, V.rz, V.n_springs, V.n_tris);
     V.springs.resize(n * V.stride_e);
     V.nbrs.resize(n * V.stride_e);
     V.tris.resize(n * V.stride_t);
     V.wings.resize(n * V.stride_t);
   }
-  return v;
+  if (const std::size_t n = E.lid.size(); n != E.a.size())
+    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
+  if (const std::size_t n = T.lid.size(); n != T.v0.size())
+    grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
 }
 
 void Topology::free_vertex(int v) {
@@ -89,14 +97,8 @@ void Topology::free_vertex(int v) {
 
 int Topology::new_edge(int a, int b, float l0) {
   const int e = take_edge();
+  fit();
   init_edge(e, a, b, l0);
-  return e;
-}
-
-int Topology::take_edge() {
-  const int e = take_slot(E, E.a.size());
-  if (e == int(E.a.size()))
-    grow(std::size_t(e) + 1, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
   return e;
 }
 
@@ -126,15 +128,11 @@ void Topology::free_edge(int e) {
 
 int Topology::new_triangle() {
   const int t = take_triangle();
+  fit();
   init_triangle(t);
   return t;
 }
 
-int Topology::take_triangle() {
-  const int t = take_slot(T, T.v0.size());
-  if (t == int(T.v0.size())) grow(std::size_t(t) + 1, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
-  return t;
-}
 
 void Topology::init_triangle(int t) {
   T.v0[t] = T.v1[t] = T.v2[t] = 0;

@@ -137,8 +137,9 @@ class Topology {
   void reserve(std::size_t vertices, std::size_t edges, std::size_t triangles);
 
   // Element edits take and return slots; the logical id follows the id policy. new_X is
-  // take_X (allocates the id and slot: serial, in event order) then init_X (fills the slot and
-  // lists it: may run in parallel for elements of disjoint vertices).
+  // take_X (allocates the id and slot: serial, in event order), fit (sizes the arrays to the
+  // slots taken: once for a whole batch of takes) then init_X (fills the slot and lists it: may
+  // run in parallel for elements of disjoint vertices).
   int new_vertex();
   int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
   int new_triangle();
@@ -146,6 +147,7 @@ class Topology {
   int take_edge();
   int take_triangle();
   int take_record();  ///< a split record id (LIFO free list, else a new one)
+  void fit();         ///< grows every array to the slots taken (new slots value-initialized)
   void init_vertex(int v);
   void init_edge(int e, int a, int b, float l0);
   void init_triangle(int t);
