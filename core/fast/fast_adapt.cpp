@@ -152,7 +152,6 @@ StepEvents FastSimulator::adapt_apply() {
   // still receives its edits in event order: the result is the serial one, bit for bit
   // (docs/DECISIONS.md D13).
   const int nv0 = m.V.size();
-  const std::uint64_t restored_mark = 2 * pass_, renewed_mark = 2 * pass_ + 1;
   if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
     for (int e : splits) {
       if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
@@ -250,6 +249,7 @@ StepEvents FastSimulator::adapt_apply() {
     }
   };
   constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
+  constexpr int kWaveGrain = 32;   // a restore costs about as much as a split (3-4 us)
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start[r + 1] - start[r] > kRoundGrain;
     par_.run(start[r + 1] - start[r], kRoundGrain, [&](int b, int e) {
@@ -265,45 +265,118 @@ StepEvents FastSimulator::adapt_apply() {
     for (int e : later) topo_.E.msum[e] = m.V.m[m.E.a[e]] + m.V.m[m.E.b[e]];
   for (int v : involved) split_vertex_[v] = 0;
   for (std::uint8_t a : applied) ev.splits += a;
-  // Restores: can_restore of every candidate in parallel on the state after the splits. An
-  // earlier restore of this pass can change a later candidate's answer only through a vertex
-  // both involve (edges and triangles of a restore join its own vertices), so a candidate is
-  // re-checked, in order, only when an earlier restore touched one of its vertices.
-  // (On one thread the pre-test only adds a pass over the candidates: they are tested inline.)
-  const bool pretest = par_.threads() > 1;
-  std::vector<std::uint8_t> restorable(pretest ? restores.size() : 0);
-  if (pretest)
-    par_.run(int(restores.size()), 128, [&](int b, int e) {
-      for (int k = b; k < e; ++k) restorable[k] = can_restore(restores[k]);
-    });
-  if (vertex_stamp_.size() < std::size_t(m.V.size())) vertex_stamp_.resize(std::size_t(m.V.size()), 0);
-  for (std::size_t k = 0; k < restores.size(); ++k) {
-    if (k + 2 * kFar < restores.size()) prefetch_edge(m, restores[k + 2 * kFar]);
-    if (k + kFar < restores.size()) prefetch(&m.records[m.E.record[restores[k + kFar]]]);
-    if (k + kNear < restores.size()) prefetch_restore(m, restores[k + kNear]);
-    const int e = restores[k];
-    const SplitRecord& r = m.records[m.E.record[e]];
-    const auto t = r.t;
-    if (std::any_of(t.begin(), t.end(), touched)) continue;
-    bool near_earlier = vertex_stamp_[r.n] == restored_mark;
-    for (int v : r.k) near_earlier |= v >= 0 && vertex_stamp_[v] == restored_mark;
-    if (!(near_earlier || !pretest ? can_restore(e) : restorable[k])) continue;
-    const std::array<int, 5> verts{r.n, r.k[0], r.k[1], r.k[2], r.k[3]};
-    restore_edge(e);
-    for (int v : verts)
-      if (v >= 0) vertex_stamp_[v] = restored_mark;
-    for (int q : t) stamp(q);
-    ++ev.restores;
+  // Restores, in waves (docs/DECISIONS.md D14). A restore reads and writes only its own
+  // vertices {n, i, j, l, r} with their lists, edges and triangles, so a candidate's answer
+  // can change only through an earlier candidate sharing one of its vertices. A wave scans the
+  // pending candidates in event order: one sharing a vertex with an earlier candidate of the
+  // scan that is accepted or waiting waits for the next wave (and claims its vertices, so
+  // that later candidates at them wait too); the others are decided on the current state and
+  // the accepted ones, vertex-disjoint, apply in parallel. Every vertex sees its restores in
+  // event order, and the freed ids reach the free lists in event order after the waves: the
+  // serial result, bit for bit. The first wave's answers are pre-tested in parallel, so its
+  // serial scan reads only a compact array and the claims.
+  if (serial_splits_) {  // the definition the waves reproduce
+    for (int e : restores) {
+      const SplitRecord& r = m.records[m.E.record[e]];
+      if (std::any_of(r.t.begin(), r.t.end(), touched) || !can_restore(e)) continue;
+      const auto t = r.t;
+      restore_edge(e);
+      for (int q : t) stamp(q);
+      ++ev.restores;
+    }
   }
+  const std::vector<int>& wave_restores = serial_splits_ ? no_splits : restores;
+  const int nr = int(wave_restores.size());
+  enum : std::uint8_t { kNever, kNotNow, kRestorable };  // a candidate's answer on the state after the splits
+  candidates_.resize(std::size_t(nr));
+  par_.run(nr, 128, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      if (k + kNear < e) prefetch(&m.records[m.E.record[wave_restores[k + kNear]]]);
+      const int edge = wave_restores[k];
+      const SplitRecord& r = m.records[m.E.record[edge]];
+      // touched() sees the splits' stamps only: a restore's stamps matter to candidates that
+      // share its vertices, which wait for a later wave and test touched() again there.
+      const std::uint8_t answer = std::any_of(r.t.begin(), r.t.end(), touched) ? kNever
+                                  : can_restore(edge)                           ? kRestorable
+                                                                                : kNotNow;
+      candidates_[k] = RestoreCandidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
+    }
+  });
+  claim_.resize(std::size_t(m.V.size()), 0);  // all 0 between waves
+  std::vector<int> pending, next, wave, claimed;
+  for (int k = 0; k < nr; ++k)
+    if (candidates_[k].answer != kNever) pending.push_back(k);
+  std::vector<std::pair<int, Freed>> freed;  // (candidate, what its restore freed)
+  std::vector<std::vector<int>> later;       // per restore of a wave: springs for after it
+  for (bool first = true; !pending.empty(); first = false) {
+    next.clear(), wave.clear(), claimed.clear();
+    for (std::size_t q = 0; q < pending.size(); ++q) {
+      if (q + kFar < pending.size())
+        for (int v : candidates_[pending[q + kFar]].verts)
+          if (v >= 0) prefetch(&claim_[v]);
+      const int k = pending[q], e = wave_restores[k];
+      const std::array<int, 5>& verts = candidates_[k].verts;
+      const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
+      if (!waits) {
+        if (first && candidates_[k].answer != kRestorable) continue;
+        if (!first) {
+          const SplitRecord& r = m.records[m.E.record[e]];
+          if (std::any_of(r.t.begin(), r.t.end(), touched) || !can_restore(e)) continue;
+        }
+      }
+      for (int v : verts)
+        if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed.push_back(v);
+      if (waits) {
+        next.push_back(k);
+        continue;
+      }
+      wave.push_back(k);
+      for (int t : m.records[m.E.record[e]].t) stamp(t);
+    }
+    // msum [Eq 5] of a restore's springs as in the splits' rounds: a spring to a vertex another
+    // candidate claimed gets it after the wave, from the masses as the wave leaves them.
+    const std::size_t done = freed.size();
+    freed.resize(done + wave.size());
+    later.assign(wave.size(), {});
+    par_.run(int(wave.size()), kWaveGrain, [&](int b, int e) {
+      for (int q = b; q < e; ++q) {
+        if (q + kNear < e) prefetch_restore(m, wave_restores[wave[q + kNear]]);
+        const int k = wave[q];
+        freed[done + q] = {k, restore_edge_local(wave_restores[k])};
+        const std::array<int, 5>& own = candidates_[k].verts;
+        for (int v : own) {
+          if (v < 0 || v == own[0]) continue;  // n is gone
+          const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
+          for (int s = 0; s < m.V.n_springs[v]; ++s) {
+            const int u = nb[s];
+            if (claim_[u] && claim_[u] != k + 1) {
+              later[q].push_back(sp[s] >> 1);
+              continue;
+            }
+            topo_.E.msum[sp[s] >> 1] = (sp[s] & 1) ? m.V.m[u] + m.V.m[v] : m.V.m[v] + m.V.m[u];
+          }
+        }
+      }
+    });
+    for (const std::vector<int>& springs : later)
+      for (int e : springs) topo_.E.msum[e] = m.V.m[m.E.a[e]] + m.V.m[m.E.b[e]];
+    for (int v : claimed) claim_[v] = 0;
+    large_waves_ += wave.size() > std::size_t(kWaveGrain);
+    pending.swap(next);
+  }
+  std::sort(freed.begin(), freed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& f : freed) topo_.free_ids(f.second);
+  ev.restores += int(freed.size());
   // Bring the areas and normals computed for the decisions up to date where the topology
   // changed, so the next step need not recompute them all (range kernels on single elements,
   // in parallel; each corner once).
+  vertex_stamp_.resize(std::size_t(m.V.size()), 0);
   std::vector<int> live, verts;
   for (int t : changed) {
     if (!topo_.T.alive[t]) continue;
     live.push_back(t);
     for (int v : topo_.T.corners(t))
-      if (vertex_stamp_[v] != renewed_mark) vertex_stamp_[v] = renewed_mark, verts.push_back(v);
+      if (vertex_stamp_[v] != pass_) vertex_stamp_[v] = pass_, verts.push_back(v);
   }
   par_.run(int(live.size()), 512, [&](int b, int e) {
     for (int k = b; k < e; ++k) triangle_areas(topo_, live[k], live[k] + 1);
@@ -471,6 +544,13 @@ bool FastSimulator::can_restore(int e) const {
 }
 
 void FastSimulator::restore_edge(int e) {
+  const std::array<int, 4> k = topo_.records[topo_.E.record[e]].k;
+  topo_.free_ids(restore_edge_local(e));
+  for (int v : k)
+    if (v >= 0) topo_.update_msum(v);
+}
+
+Freed FastSimulator::restore_edge_local(int e) {
   Topology& m = topo_;
   Vertices& V = m.V;
   const int rid = m.E.record[e];
@@ -509,15 +589,17 @@ void FastSimulator::restore_edge(int e) {
   }
   for (int t : s.t)
     if (t >= 0) m.detach(t);
-  for (int id : s.e)
-    if (id >= 0) m.free_edge(id);
-  if (s.t[1] >= 0) m.free_triangle(s.t[1]);
-  if (s.t[3] >= 0) m.free_triangle(s.t[3]);
-  m.free_vertex(n);
+  Freed freed;
+  for (int q = 0; q < 4; ++q)
+    if (s.e[q] >= 0) m.release_edge(s.e[q]), freed.edges[q] = s.e[q];
+  if (s.t[1] >= 0) m.release_triangle(s.t[1]), freed.tris[0] = s.t[1];
+  if (s.t[3] >= 0) m.release_triangle(s.t[3]), freed.tris[1] = s.t[3];
+  m.release_vertex(n);
+  freed.vertex = n;
+  freed.record = rid;
   m.E.flags[e] = kAlive | kMesh | kBreakable;
   m.E.l0[e] = float(s.l0);
   m.E.record[e] = -1;
-  m.free_records.push_back(rid);
   if (s.t[0] >= 0) {
     const auto v = replaced(m.T, s.t[0], n, j);
     m.attach(s.t[0], v[0], v[1], v[2]);
@@ -526,8 +608,7 @@ void FastSimulator::restore_edge(int e) {
     const auto v = replaced(m.T, s.t[2], n, i);
     m.attach(s.t[2], v[0], v[1], v[2]);
   }
-  for (int k : s.k)
-    if (k >= 0) m.update_msum(k);
+  return freed;
 }
 
 std::vector<Decision> FastSimulator::decide() const {

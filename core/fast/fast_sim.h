@@ -78,11 +78,13 @@ class FastSimulator final : public Simulator {
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
   /// but for the last bits of the momentum correction (layout.h).
   void set_layout_fraction(double f) { layout_fraction_ = f; }
-  /// Test hook: apply a pass's splits one after the other instead of in parallel rounds (the
-  /// rounds must give the same result, bit for bit).
+  /// Test hook: apply a pass's splits and restores one after the other instead of in parallel
+  /// rounds and waves (which must give the same result, bit for bit).
   void set_serial_splits(bool on) { serial_splits_ = on; }
   /// Split rounds so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_rounds() const { return large_rounds_; }
+  /// Restore waves so far large enough to run as a parallel loop (tests check they happened).
+  std::uint64_t large_waves() const { return large_waves_; }
 
  private:
   StepConstants step_constants() const;
@@ -107,7 +109,10 @@ class FastSimulator final : public Simulator {
   void update_split_msum(const SplitPlan& p); ///< msum [Eq 5] of the springs at its vertices
   bool split_edge(int e, float flat_draw);    ///< plan, apply, msum: one split alone
   bool can_restore(int e) const;
-  void restore_edge(int e);
+  void restore_edge(int e);                 ///< one restore alone, msum and free lists included
+  /// All of a restore but msum of its springs and the free lists (safe in parallel for restores
+  /// of disjoint vertices): returns what it freed, for Topology::free_ids.
+  Freed restore_edge_local(int e);
 
   Params params_;
   SceneSetup scene_;
@@ -117,15 +122,22 @@ class FastSimulator final : public Simulator {
   std::uint64_t steps_ = 0;
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
-  std::vector<std::uint64_t> vertex_stamp_;  ///< 2 x pass + 0 (restored) or 1 (normal renewed)
+  std::vector<std::uint64_t> vertex_stamp_;  ///< pass that last renewed each vertex normal
   std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
   std::vector<int> spring_adds_;          ///< per vertex: springs the splits of this pass add
   std::vector<int> tri_adds_;             ///< per vertex: triangles the splits of this pass add
   std::vector<std::uint8_t> split_vertex_;  ///< per vertex: 1 while a split of the pass involves it
+  std::vector<int> claim_;                ///< per vertex: 1 + the restore candidate claiming it in a wave
+  struct RestoreCandidate {
+    std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
+    std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)
+  };
+  std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_splits_ = false;            ///< see set_serial_splits
   std::uint64_t large_rounds_ = 0;        ///< see large_rounds
+  std::uint64_t large_waves_ = 0;         ///< see large_waves
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};

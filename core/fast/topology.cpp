@@ -89,10 +89,14 @@ void Topology::fit() {
 }
 
 void Topology::free_vertex(int v) {
+  release_vertex(v);
+  V.free_ids.push_back(V.lid[v]);
+}
+
+void Topology::release_vertex(int v) {
   V.x[v] = V.y[v] = V.z[v] = V.vx[v] = V.vy[v] = V.vz[v] = V.m[v] = 0;
   V.nx[v] = V.ny[v] = V.nz[v] = V.rx[v] = V.ry[v] = V.rz[v] = 0;
   V.n_springs[v] = V.n_tris[v] = 0;
-  V.free_ids.push_back(V.lid[v]);
 }
 
 int Topology::new_edge(int a, int b, float l0) {
@@ -115,6 +119,11 @@ void Topology::init_edge(int e, int a, int b, float l0) {
 }
 
 void Topology::free_edge(int e) {
+  release_edge(e);
+  E.free_ids.push_back(E.lid[e]);
+}
+
+void Topology::release_edge(int e) {
   unlist_spring(E.a[e], e << 1);
   unlist_spring(E.b[e], (e << 1) | 1);
   E.a[e] = E.b[e] = 0;
@@ -123,7 +132,6 @@ void Topology::free_edge(int e) {
   E.msum[e] = 0;
   E.flags[e] = 0;
   E.out[e] = EdgeOut{};
-  E.free_ids.push_back(E.lid[e]);
 }
 
 int Topology::new_triangle() {
@@ -142,11 +150,24 @@ void Topology::init_triangle(int t) {
 }
 
 void Topology::free_triangle(int t) {
+  release_triangle(t);
+  T.free_ids.push_back(T.lid[t]);
+}
+
+void Topology::release_triangle(int t) {
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 0;
   T.area[t] = Float4{};
-  T.free_ids.push_back(T.lid[t]);
+}
+
+void Topology::free_ids(const Freed& f) {
+  for (int e : f.edges)
+    if (e >= 0) E.free_ids.push_back(E.lid[e]);
+  for (int t : f.tris)
+    if (t >= 0) T.free_ids.push_back(T.lid[t]);
+  if (f.vertex >= 0) V.free_ids.push_back(V.lid[f.vertex]);
+  if (f.record >= 0) free_records.push_back(f.record);
 }
 
 int Topology::take_record() {

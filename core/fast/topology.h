@@ -44,6 +44,15 @@ struct SplitRecord {
   double l0 = 0;                         ///< rest length before the break
 };
 
+/// The slots one restore frees, in the order it frees them (-1: none): Topology::free_ids puts
+/// them on the free lists, after the restores of a wave ran in parallel (fast_adapt.cpp).
+struct Freed {
+  std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
+  std::array<int, 2> tris{-1, -1};           ///< (n,j,l), (n,i,r)
+  int vertex = -1;                           ///< n
+  int record = -1;                           ///< the split record
+};
+
 /// A 3-vector padded to 16 bytes: state that the kernels gather at random (one load, one line).
 struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
@@ -156,6 +165,12 @@ class Topology {
   void free_vertex(int v);
   void free_edge(int e);  ///< unlists it from its endpoints
   void free_triangle(int t);
+  // free_X is release_X (clears the slot: may run in parallel for elements of disjoint vertices)
+  // then puts its id on the free list (serial, in event order: free_ids for a batch).
+  void release_vertex(int v);
+  void release_edge(int e);
+  void release_triangle(int t);
+  void free_ids(const Freed& f);
 
   int mesh_edge(int a, int b) const;  ///< live mesh edge joining a and b, or -1
   /// Sets triangle t to (a, b, c), links its edges' slots and wings and lists t at its corners.

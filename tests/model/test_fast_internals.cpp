@@ -122,32 +122,36 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   EXPECT_LT(worst, 1e-6);
 }
 
-// Splits applied in parallel rounds of vertex-disjoint events against the same splits applied
-// one after the other in event order: bit-identical states through a crumple with thousands of
-// splits, on one thread (rounds run as plain loops) and on two (rounds in parallel).
-TEST(FastTopology, ParallelSplitRoundsEqualSerialSplits) {
+// Splits and restores applied in parallel rounds and waves of vertex-disjoint events against
+// the same events applied one after the other in event order: bit-identical states through a
+// crumple with thousands of splits and restores, on one thread (rounds and waves run as plain
+// loops) and on two (in parallel).
+TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
   Params p;
   for (int threads : {1, 2}) {
-    std::uint64_t large_rounds = 0;
+    std::uint64_t large_rounds = 0, large_waves = 0;
     auto run = [&](bool serial, std::vector<StepEvents>& events) {  // one simulator at a time
       // 48 x 48: some rounds of over 64 splits, which run as parallel loops (smaller ones inline).
       fast::FastSimulator sim(make_grid(48), p, threads);
       sim.set_serial_splits(serial);
-      for (int f = 0; f < 75; ++f) events.push_back(sim.step());
+      for (int f = 0; f < 110; ++f) events.push_back(sim.step());
       EXPECT_EQ(sim.check_topology(), "");
-      if (!serial) large_rounds = sim.large_rounds();
+      if (!serial) large_rounds = sim.large_rounds(), large_waves = sim.large_waves();
       return sim.snapshot();
     };
     std::vector<StepEvents> ea, eb;
     const Snapshot rounds = run(false, ea), serial = run(true, eb);
-    long splits = 0;
+    long splits = 0, restores = 0;
     for (std::size_t f = 0; f < ea.size(); ++f) {
       ASSERT_EQ(ea[f].splits, eb[f].splits) << "frame " << f;
       ASSERT_EQ(ea[f].restores, eb[f].restores) << "frame " << f;
       splits += ea[f].splits;
+      restores += ea[f].restores;
     }
     EXPECT_GT(splits, 2000);
-    EXPECT_GT(large_rounds, 10u);  // the parallel path did run
+    EXPECT_GT(restores, 500);
+    EXPECT_GT(large_rounds, 10u);  // the parallel paths did run
+    EXPECT_GT(large_waves, 0u);
     EXPECT_TRUE(same_snapshot(rounds, serial)) << threads << " threads";
   }
 }
