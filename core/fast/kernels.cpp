@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fast/wide.h"
 #include "model/random.h"
 
 #define CRUMPLE_SIMD_LOOP _Pragma("omp simd")
@@ -38,6 +39,18 @@ void triangle_areas(Topology& m, int begin, int end) {
                       m.V.z.data(), m.T.area.data(), begin, end);
 }
 
+namespace {
+// Sums over adjacency lists. The first kFixed entries of a list are summed in a loop of fixed
+// length, entries past the list's count reading a zero record instead (adding an exact 0
+// changes no sum: a sum that starts at +0 never becomes -0): valences vary from 3 to 20, and
+// a loop that ends at the count mispredicts its exit once per list. Lists have room for at
+// least kFixed entries (strides start at 16 and only widen).
+constexpr int kFixed = 8;
+alignas(64) const EdgeOut kZeroRow{};
+const Float4 kZero4{};
+using Row4 = Wide<4>;
+}  // namespace
+
 void vertex_normals(Topology& m, int begin, int end) {
   const int stride = m.V.stride_t;
   const std::int32_t* __restrict tris = m.V.tris.data();
@@ -45,14 +58,12 @@ void vertex_normals(Topology& m, int begin, int end) {
   const Float4* __restrict area = m.T.area.data();
   float *__restrict nx = m.V.nx.data(), *__restrict ny = m.V.ny.data(), *__restrict nz = m.V.nz.data();
   for (int v = begin; v < end; ++v) {
-    float sx = 0, sy = 0, sz = 0;
+    Row4 sum = Row4::zero();
     const std::int32_t* list = tris + std::size_t(v) * stride;
-    for (int k = 0; k < count[v]; ++k) {
-      const Float4& a = area[list[k] >> 2];
-      sx += a.x;
-      sy += a.y;
-      sz += a.z;
-    }
+    const int n = count[v];
+    for (int k = 0; k < kFixed; ++k) sum += Row4::load(k < n ? &area[list[k] >> 2] : &kZero4);
+    for (int k = kFixed; k < n; ++k) sum += Row4::load(&area[list[k] >> 2]);
+    const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
     const float inv = len > 0 ? 1.0f / len : 0.0f;
     nx[v] = sx * inv;
@@ -105,36 +116,39 @@ void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
                    m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
 }
 
+namespace {
+// The gather sums whole EdgeOut records as rows of 16 floats, each scaled lane by lane by the
+// role the vertex plays: a row of (f, kappa_e, j, -kb, mean) for endpoint a, the force and j
+// negated for endpoint b (b receives the opposite of a), and only (kb, mean) as a wing. Scaling
+// by 1, -1 or 0 is exact, so each lane sums exactly what the per-field sums did.
+using Row = Wide<16>;
+static_assert(sizeof(EdgeOut) == sizeof(Row));
+const Row kAsEndpoint[2] = {
+    Row{{1, 1, 1, 1, 1, 1, 1, -1, 1, 1, 1, 0, 0, 0, 0, 0}},      // v is a
+    Row{{-1, -1, -1, 1, -1, -1, -1, -1, 1, 1, 1, 0, 0, 0, 0, 0}}, // v is b
+};
+const Row kAsWing{{0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 0}};
+}  // namespace
+
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const int se = V.stride_e, st = V.stride_t;
   const EdgeOut* __restrict out = m.E.out.data();
   for (int v = begin; v < end; ++v) {
-    float fx = 0, fy = 0, fz = 0, ks = 0, jx = 0, jy = 0, jz = 0, kn = 0, mx = 0, my = 0, mz = 0;
+    Row sum = Row::zero();
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
-    for (int k = 0; k < V.n_springs[v]; ++k) {
-      const EdgeOut& o = out[springs[k] >> 1];
-      const float sg = (springs[k] & 1) ? -1.0f : 1.0f;  // b receives the opposite of a
-      fx += sg * o.fx;
-      fy += sg * o.fy;
-      fz += sg * o.fz;
-      ks += o.kap;
-      jx += sg * o.jx;  // kappa_e (v_other - v_v)
-      jy += sg * o.jy;
-      jz += sg * o.jz;
-      kn -= o.kb;  // hinge role: f = -k n_v - mean
-      mx += o.bx;
-      my += o.by;
-      mz += o.bz;
+    const int ns = V.n_springs[v], nt = V.n_tris[v];
+    for (int k = 0; k < kFixed; ++k) {
+      const EdgeOut* o = k < ns ? &out[springs[k] >> 1] : &kZeroRow;
+      sum += Row::load(o) * kAsEndpoint[springs[k] & 1];
     }
-    const std::int32_t* wings = &V.wings[std::size_t(v) * st];
-    for (int k = 0; k < V.n_tris[v]; ++k) {
-      const EdgeOut& o = out[wings[k]];  // v is a wing of the edge opposite it
-      kn += o.kb;  // wing role: f = +k n_v - mean
-      mx += o.bx;
-      my += o.by;
-      mz += o.bz;
-    }
+    for (int k = kFixed; k < ns; ++k) sum += Row::load(&out[springs[k] >> 1]) * kAsEndpoint[springs[k] & 1];
+    const std::int32_t* wings = &V.wings[std::size_t(v) * st];  // v is a wing of the edge opposite it
+    for (int k = 0; k < kFixed; ++k) sum += Row::load(k < nt ? &out[wings[k]] : &kZeroRow) * kAsWing;
+    for (int k = kFixed; k < nt; ++k) sum += Row::load(&out[wings[k]]) * kAsWing;
+    float fx = sum[0], fy = sum[1], fz = sum[2];
+    const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of kappa_e (v_other - v_v)
+    const float kn = sum[7], mx = sum[8], my = sum[9], mz = sum[10];  // f = -k n_v (hinge), +k n_v (wing), - mean
     const float mass = V.m[v];
     fx += kn * V.nx[v] - mx;
     fy += kn * V.ny[v] - my;
@@ -161,16 +175,17 @@ void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
   const int se = V.stride_e;
   const Float4* __restrict g = V.g.data();
   for (int v = begin; v < end; ++v) {
-    float sx = 0, sy = 0, sz = 0;
+    Row4 sum = Row4::zero();
     const float mass = V.m[v];
     const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
-    for (int k = 0; k < V.n_springs[v]; ++k) {
-      const Float4& o = g[nbrs[k]];
-      const float kap = c.kappa * (mass + o.w);  // kappa_e [Eq 5], the neighbour's mass in w
-      sx += kap * o.x;
-      sy += kap * o.y;
-      sz += kap * o.z;
-    }
+    const int n = V.n_springs[v];
+    auto add = [&](const Float4* p) {
+      const Row4 o = Row4::load(p);
+      sum += (c.kappa * (mass + o[3])) * o;  // kappa_e [Eq 5] (the neighbour's mass in w) times its guess
+    };
+    for (int k = 0; k < kFixed; ++k) add(k < n ? &g[nbrs[k]] : &kZero4);
+    for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
+    const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float inv = 1.0f / (mass + c.h2 * V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
     V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + c.h2 * sx) * inv,
                          (mass * V.vy[v] + c.h * V.fy[v] + c.h2 * sy) * inv,
