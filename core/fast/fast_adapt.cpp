@@ -155,7 +155,7 @@ StepEvents FastSimulator::adapt_apply() {
   if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
     for (int e : splits) {
       if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
-      if (!split_edge(e, float(uniform(params_.seed, steps_, std::uint32_t(m.E.lid[e]), Draw::FlatSign)))) continue;
+      if (!split_edge(e)) continue;
       for (int t : m.records[m.E.record[e]].t) stamp(t);
       ++ev.splits;
     }
@@ -170,21 +170,29 @@ StepEvents FastSimulator::adapt_apply() {
   split_vertex_.resize(std::size_t(nv0), 0);
   std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
   int rounds = 0, need_springs = 0, need_tris = 0;
+  // What the serial pre-pass needs of each candidate, read in parallel into a compact array
+  // (the pre-pass then touches only it, the stamps and the rounds).
+  split_candidates_.resize(round_splits.size());
+  par_.run(int(round_splits.size()), 256, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      if (k + kFar < e) prefetch_edge(m, round_splits[k + kFar]);
+      split_candidates_[k] = split_candidate(round_splits[k]);
+    }
+  });
   for (std::size_t k = 0; k < round_splits.size(); ++k) {
-    if (k + kFar < round_splits.size()) prefetch_edge(m, round_splits[k + kFar]);
-    if (k + kNear < round_splits.size()) {  // its edge's lines are cached by now
-      const int f = round_splits[k + kNear];
-      for (int t : {m.E.tri0[f], m.E.tri1[f]})
+    if (k + kNear < round_splits.size()) {
+      const SplitCandidate& f = split_candidates_[k + kNear];
+      for (int t : f.tris)
         if (t >= 0 && t < int(tri_stamp_.size())) prefetch(&tri_stamp_[t]);
-      for (int v : {m.E.a[f], m.E.b[f], m.E.wl[f], m.E.wr[f]})
+      for (int v : f.ends)
         if (v >= 0) prefetch(&round_last_[v]), prefetch(&split_vertex_[v]);
     }
-    const int e = round_splits[k];
-    const int tL = m.E.tri0[e], tR = m.E.tri1[e];
+    const SplitCandidate& c = split_candidates_[k];
+    const int tL = c.tris[0], tR = c.tris[1];
     if (touched(tL) || touched(tR)) continue;
-    const SplitPlan p = plan_split(e, float(uniform(params_.seed, steps_, std::uint32_t(m.E.lid[e]), Draw::FlatSign)));
+    const SplitPlan p = plan_split(c);
     if (p.e < 0) continue;
-    const int ends[4] = {m.E.a[e], m.E.b[e], m.E.wl[e], m.E.wr[e]};
+    const std::array<int, 4>& ends = c.ends;
     int round = 0;
     for (int v : ends)
       if (v >= 0) round = std::max(round, round_last_[v]);
@@ -205,9 +213,9 @@ StepEvents FastSimulator::adapt_apply() {
   // lose their two triangles before they gain two). Exact, so strides widen when the serial
   // order would have widened them, not earlier (a wider stride slows every gather).
   for (const SplitPlan& p : plans) {
-    for (int v : {m.E.a[p.e], m.E.b[p.e], m.E.wl[p.e], m.E.wr[p.e]})
+    for (int v : p.ends)
       if (v >= 0) ++spring_adds_[v];
-    for (int v : {m.E.wl[p.e], m.E.wr[p.e]})
+    for (int v : {p.ends[2], p.ends[3]})
       if (v >= 0) ++tri_adds_[v];
   }
   for (int v : involved) {
@@ -402,26 +410,38 @@ StepEvents FastSimulator::adapt() {
   return ev;
 }
 
-FastSimulator::SplitPlan FastSimulator::plan_split(int e, float flat_draw) {
+FastSimulator::SplitCandidate FastSimulator::split_candidate(int e) const {
+  const Edges& E = topo_.E;
+  SplitCandidate c;
+  if (E.flags[e] != (kAlive | kMesh | kBreakable)) return c;
+  c.e = e;
+  c.tris = {E.tri0[e], E.tri1[e]};
+  c.ends = {E.a[e], E.b[e], E.wl[e], E.wr[e]};
+  c.flat_draw = float(uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::FlatSign));
+  return c;
+}
+
+FastSimulator::SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
   Topology& m = topo_;
   SplitPlan p;
-  if (!(m.E.flags[e] & kAlive) || !(m.E.flags[e] & kMesh) || !(m.E.flags[e] & kBreakable)) return p;
-  p.e = e;
-  p.flat_draw = flat_draw;
+  if (c.e < 0) return p;
+  p.e = c.e;
+  p.flat_draw = c.flat_draw;
+  p.ends = c.ends;
   // The order in which a split allocates (the id policy of sim/simulator.h).
   p.n = m.take_vertex();
   p.edges[0] = m.take_edge();
   p.edges[1] = m.take_edge();
-  if (m.E.wl[e] >= 0) p.edges[2] = m.take_edge();
-  if (m.E.wr[e] >= 0) p.edges[3] = m.take_edge();
-  if (m.E.tri0[e] >= 0) p.tris[0] = m.take_triangle();
-  if (m.E.tri1[e] >= 0) p.tris[1] = m.take_triangle();
+  if (c.ends[2] >= 0) p.edges[2] = m.take_edge();
+  if (c.ends[3] >= 0) p.edges[3] = m.take_edge();
+  if (c.tris[0] >= 0) p.tris[0] = m.take_triangle();
+  if (c.tris[1] >= 0) p.tris[1] = m.take_triangle();
   p.record = m.take_record();
   return p;
 }
 
-bool FastSimulator::split_edge(int e, float flat_draw) {
-  const SplitPlan p = plan_split(e, flat_draw);
+bool FastSimulator::split_edge(int e) {
+  const SplitPlan p = plan_split(split_candidate(e));
   if (p.e < 0) return false;
   topo_.fit();
   const bool ok = apply_split(p);
@@ -623,7 +643,7 @@ bool FastSimulator::split(int id) {
   if (id < 0 || id >= topo_.E.size()) return false;
   compute_normals();
   normals_valid_ = false;
-  return split_edge(topo_.E.phys[id], float(uniform(params_.seed, steps_, std::uint32_t(id), Draw::FlatSign)));
+  return split_edge(topo_.E.phys[id]);
 }
 
 bool FastSimulator::restore(int id) {

@@ -96,18 +96,27 @@ class FastSimulator final : public Simulator {
   StepEvents adapt_apply();///< the serial splits and restores of decisions_
   /// A split with its new ids taken in advance (serially, in event order), so that splits of
   /// disjoint vertex sets can then apply in parallel.
+  /// What a split of edge e needs to know before it is planned (read in parallel).
+  struct SplitCandidate {
+    int e = -1;                               ///< the edge (-1: not splittable)
+    float flat_draw = 0;                      ///< the FlatSign draw of [Eq 7]
+    std::array<int, 2> tris{-1, -1};          ///< tri0, tri1 at the start of the pass
+    std::array<int, 4> ends{-1, -1, -1, -1};  ///< i, j, l, r (-1: no wing)
+  };
   struct SplitPlan {
     int e = -1;                          ///< the edge (-1: not splittable)
     float flat_draw = 0;                 ///< the FlatSign draw of [Eq 7]
+    std::array<int, 4> ends{-1, -1, -1, -1};  ///< i, j, l, r (-1: no wing)
     int n = -1;                          ///< the new vertex
     std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
     std::array<int, 2> tris{-1, -1};     ///< (n,j,l), (n,i,r)
     int record = -1;                     ///< the split record
   };
-  SplitPlan plan_split(int e, float flat_draw);
+  SplitCandidate split_candidate(int e) const;
+  SplitPlan plan_split(const SplitCandidate& c);  ///< takes the new ids (serial, in event order)
   bool apply_split(const SplitPlan& p);       ///< all of the split but msum of its springs
   void update_split_msum(const SplitPlan& p); ///< msum [Eq 5] of the springs at its vertices
-  bool split_edge(int e, float flat_draw);    ///< plan, apply, msum: one split alone
+  bool split_edge(int e);                     ///< plan, apply, msum: one split alone
   bool can_restore(int e) const;
   void restore_edge(int e);                 ///< one restore alone, msum and free lists included
   /// All of a restore but msum of its springs and the free lists (safe in parallel for restores
@@ -132,6 +141,7 @@ class FastSimulator final : public Simulator {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
     std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)
   };
+  std::vector<SplitCandidate> split_candidates_;  ///< this pass's split candidates, in event order
   std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
