@@ -514,8 +514,11 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   V.nx[n] = float(nu.x), V.ny[n] = float(nu.y), V.nz[n] = float(nu.z);
   for (int t : {tL, tR})
     if (t >= 0) m.detach(t);
-  // e_ij becomes an auxiliary spring holding the crease at its current length.
+  // e_ij becomes an auxiliary spring holding the crease at its current length, with the
+  // crease's wings in its wing slots (for [Eq 10]).
   m.E.flags[e] = kAlive;
+  m.E.wl[e] = l;
+  m.E.wr[e] = r;
   m.E.l0[e] = float(lt);
   rec.n = n;
   rec.e = plan.edges;
@@ -620,6 +623,7 @@ Freed FastSimulator::restore_edge_local(int e) {
   m.E.flags[e] = kAlive | kMesh | kBreakable;
   m.E.l0[e] = float(s.l0);
   m.E.record[e] = -1;
+  m.E.wl[e] = m.E.wr[e] = -1;  // attach below links its triangles' wings
   if (s.t[0] >= 0) {
     const auto v = replaced(m.T, s.t[0], n, j);
     m.attach(s.t[0], v[0], v[1], v[2]);

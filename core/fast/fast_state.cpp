@@ -64,8 +64,8 @@ Snapshot FastSimulator::snapshot() const {
     if (f & kAlive) {
       ev.a = vid(topo_.E.a[e]);
       ev.b = vid(topo_.E.b[e]);
-      ev.wing_l = vid(topo_.E.wl[e]);
-      ev.wing_r = vid(topo_.E.wr[e]);
+      ev.wing_l = (f & kMesh) ? vid(topo_.E.wl[e]) : -1;  // an auxiliary edge keeps its crease's
+      ev.wing_r = (f & kMesh) ? vid(topo_.E.wr[e]) : -1;  // wings there (topology.h), not a triangle's
       ev.rest = topo_.E.l0[e];
       ev.auxiliary = !(f & kMesh);
       ev.breakable = f & kBreakable;

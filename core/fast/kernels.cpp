@@ -259,17 +259,19 @@ void advance(Topology& m, const StepConstants& c, const float corr[3], const flo
 }
 
 namespace {
-// [Eq 6] for every edge, branch-free so that it vectorizes: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl)
-// with c = 1 - lt/l0, made per step by P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against
-// the edge's counter-based random number. `exact_step`: h = h_ref, so P_step = P (no pow).
+// [Eq 6] and [Eq 10] for every edge, branch-free so that it vectorizes. Fracture of a mesh edge:
+// P = 1/4 c (1 - phi n_ij)(1 + phi n_rl) with c = 1 - lt/l0, made per step by
+// P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the edge's counter-based random
+// number. Restoration of an auxiliary edge: its crease (wings l, r of its split) is bent
+// across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so P_step = P (no pow).
 template <bool exact_step>
-void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
-                   const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                   const float* __restrict l0, const std::uint8_t* __restrict flags,
-                   const std::int32_t* __restrict lid, const float* __restrict x,
-                   const float* __restrict y, const float* __restrict z, const float* __restrict nx,
-                   const float* __restrict ny, const float* __restrict nz, std::uint8_t* __restrict out,
-                   int begin, int end) {
+void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
+                const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
+                const float* __restrict l0, const std::uint8_t* __restrict flags,
+                const std::int32_t* __restrict record, const std::int32_t* __restrict lid,
+                const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
+                std::uint8_t* __restrict out, int begin, int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
   CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
@@ -288,8 +290,10 @@ void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, co
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
-    out[e] = std::uint8_t(can & (Pstep > 0) & (u < Pstep));
+    const bool can = c.fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
+    const bool breaks = can & (Pstep > 0) & (u < Pstep);
+    const bool restores = c.restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= c.epsilon);
+    out[e] = breaks ? 1 : (restores ? 2 : 0);
   }
 }
 }  // namespace
@@ -297,26 +301,12 @@ void fracture_body(const AdaptConstants& c, const std::int32_t* __restrict A, co
 void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, int begin, int end) {
   const Vertices& V = m.V;
   const Edges& E = m.E;
-  if (c.fracture) {
-    auto run = [&](auto body) {
-      body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), E.lid.data(), V.x.data(), V.y.data(),
-           V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(), out, begin, end);
-    };
-    if (c.step_exponent == 1.0f) run(fracture_body<true>);
-    else run(fracture_body<false>);
-  } else {
-    std::fill(out + begin, out + end, std::uint8_t(0));
-  }
-  if (!c.restoration) return;
-  for (int e = begin; e < end; ++e) {
-    const std::uint8_t f = E.flags[e];
-    if (!(f & kAlive) || (f & kMesh) || E.record[e] < 0) continue;
-    // [Eq 10]: the crease line is bent across enough to open again.
-    const SplitRecord& s = m.records[E.record[e]];
-    const int l = s.k[2], r = s.k[3];
-    const float nrl = (l >= 0 && r >= 0) ? V.nx[r] * V.nx[l] + V.ny[r] * V.ny[l] + V.nz[r] * V.nz[l] : 1.0f;
-    if ((1.0f - nrl) * 0.5f >= c.epsilon) out[e] = 2;
-  }
+  auto run = [&](auto body) {
+    body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), E.record.data(), E.lid.data(),
+         V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(), out, begin, end);
+  };
+  if (c.step_exponent == 1.0f) run(adapt_body<true>);
+  else run(adapt_body<false>);
 }
 
 }  // namespace crumple::fast

@@ -102,7 +102,9 @@ struct Vertices {
 
 struct Edges {
   Array<std::int32_t> a, b;      ///< endpoints
-  Array<std::int32_t> wl, wr;    ///< wings: third vertex of tri0 / tri1 (-1: none)
+  Array<std::int32_t> wl, wr;    ///< wings: third vertex of tri0 / tri1 (-1: none); for an
+                                 ///< auxiliary edge, l and r of its split record (the crease's
+                                 ///< wings, which [Eq 10] reads: the test needs no record)
   Array<std::int32_t> tri0, tri1;///< triangle traversing a->b / b->a (-1: none)
   Array<float> l0;               ///< rest length
   Array<float> msum;             ///< m_a + m_b: kappa_e = kappa msum [Eq 5], C_beta,e = bend msum
