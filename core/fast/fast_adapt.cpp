@@ -232,30 +232,7 @@ StepEvents FastSimulator::adapt_apply() {
     std::vector<int> fill(start.begin(), start.end());
     for (std::size_t k = 0; k < plans.size(); ++k) by_round[fill[round_of[k]]++] = int(k);
   }
-  // msum [Eq 5] of a split's springs is renewed in its round, from the masses as they are then,
-  // except for springs to a vertex of another split of the pass (whose mass another round may
-  // change): those wait for the end. A spring between two vertices of this split, or to a
-  // vertex no split touches, belongs to this split alone in its round; if a later split
-  // changes one of its ends, that split renews it again.
-  split_vertex_.resize(std::size_t(m.V.size()), 0);
   std::vector<std::uint8_t> applied(plans.size(), 0);
-  std::vector<std::vector<int>> deferred(plans.size());
-  auto renew_msum = [&](const SplitPlan& p, std::vector<int>& later) {
-    const SplitRecord& rec = m.records[p.record];
-    const int own[5] = {rec.k[0], rec.k[1], rec.k[2], rec.k[3], p.n};
-    for (int v : own) {
-      if (v < 0) continue;
-      const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
-      for (int q = 0; q < m.V.n_springs[v]; ++q) {
-        const int u = nb[q];
-        if (split_vertex_[u] && std::find(own, own + 5, u) == own + 5) {
-          later.push_back(sp[q] >> 1);
-          continue;
-        }
-        topo_.E.msum[sp[q] >> 1] = (sp[q] & 1) ? m.V.m[u] + m.V.m[v] : m.V.m[v] + m.V.m[u];
-      }
-    }
-  };
   constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
   constexpr int kWaveGrain = 32;   // a restore costs about as much as a split (3-4 us)
   for (int r = 1; r <= rounds; ++r) {
@@ -265,12 +242,9 @@ StepEvents FastSimulator::adapt_apply() {
         if (k + kNear < start[r] + e) prefetch_split(m, plans[by_round[k + kNear]].e);
         const int i = by_round[k];
         applied[i] = apply_split(plans[i]);
-        renew_msum(plans[i], deferred[i]);
       }
     });
   }
-  for (const std::vector<int>& later : deferred)  // few: springs between neighbouring splits
-    for (int e : later) topo_.E.msum[e] = m.V.m[m.E.a[e]] + m.V.m[m.E.b[e]];
   for (int v : involved) split_vertex_[v] = 0;
   for (std::uint8_t a : applied) ev.splits += a;
   // Restores, in waves (docs/DECISIONS.md D14). A restore reads and writes only its own
@@ -315,7 +289,6 @@ StepEvents FastSimulator::adapt_apply() {
   for (int k = 0; k < nr; ++k)
     if (candidates_[k].answer != kNever) pending.push_back(k);
   std::vector<std::pair<int, Freed>> freed;  // (candidate, what its restore freed)
-  std::vector<std::vector<int>> later;       // per restore of a wave: springs for after it
   for (bool first = true; !pending.empty(); first = false) {
     next.clear(), wave.clear(), claimed.clear();
     for (std::size_t q = 0; q < pending.size(); ++q) {
@@ -341,33 +314,15 @@ StepEvents FastSimulator::adapt_apply() {
       wave.push_back(k);
       for (int t : m.records[m.E.record[e]].t) stamp(t);
     }
-    // msum [Eq 5] of a restore's springs as in the splits' rounds: a spring to a vertex another
-    // candidate claimed gets it after the wave, from the masses as the wave leaves them.
     const std::size_t done = freed.size();
     freed.resize(done + wave.size());
-    later.assign(wave.size(), {});
     par_.run(int(wave.size()), kWaveGrain, [&](int b, int e) {
       for (int q = b; q < e; ++q) {
         if (q + kNear < e) prefetch_restore(m, wave_restores[wave[q + kNear]]);
         const int k = wave[q];
         freed[done + q] = {k, restore_edge_local(wave_restores[k])};
-        const std::array<int, 5>& own = candidates_[k].verts;
-        for (int v : own) {
-          if (v < 0 || v == own[0]) continue;  // n is gone
-          const std::int32_t *sp = m.springs_of(v), *nb = m.nbrs_of(v);
-          for (int s = 0; s < m.V.n_springs[v]; ++s) {
-            const int u = nb[s];
-            if (claim_[u] && claim_[u] != k + 1) {
-              later[q].push_back(sp[s] >> 1);
-              continue;
-            }
-            topo_.E.msum[sp[s] >> 1] = (sp[s] & 1) ? m.V.m[u] + m.V.m[v] : m.V.m[v] + m.V.m[u];
-          }
-        }
       }
     });
-    for (const std::vector<int>& springs : later)
-      for (int e : springs) topo_.E.msum[e] = m.V.m[m.E.a[e]] + m.V.m[m.E.b[e]];
     for (int v : claimed) claim_[v] = 0;
     large_waves_ += wave.size() > std::size_t(kWaveGrain);
     pending.swap(next);
@@ -444,15 +399,7 @@ bool FastSimulator::split_edge(int e) {
   const SplitPlan p = plan_split(split_candidate(e));
   if (p.e < 0) return false;
   topo_.fit();
-  const bool ok = apply_split(p);
-  update_split_msum(p);
-  return ok;
-}
-
-void FastSimulator::update_split_msum(const SplitPlan& p) {
-  for (int k : topo_.records[p.record].k)
-    if (k >= 0) topo_.update_msum(k);
-  topo_.update_msum(p.n);
+  return apply_split(p);
 }
 
 bool FastSimulator::apply_split(const SplitPlan& plan) {
@@ -566,12 +513,7 @@ bool FastSimulator::can_restore(int e) const {
   return true;
 }
 
-void FastSimulator::restore_edge(int e) {
-  const std::array<int, 4> k = topo_.records[topo_.E.record[e]].k;
-  topo_.free_ids(restore_edge_local(e));
-  for (int v : k)
-    if (v >= 0) topo_.update_msum(v);
-}
+void FastSimulator::restore_edge(int e) { topo_.free_ids(restore_edge_local(e)); }
 
 Freed FastSimulator::restore_edge_local(int e) {
   Topology& m = topo_;

@@ -24,7 +24,7 @@
 //              reorders every slot along a space-filling curve of the rest positions, keeping
 //              logical ids, so that neighbours stay in nearby cache lines (D12).
 //   Threads only ever split a pass's range or a round; the edits touch O(events) elements and
-//   keep every helper structure (adjacency, wings, msum) up to date incrementally, so a frame
+//   keep every helper structure (adjacency, wings) up to date incrementally, so a frame
 //   with a few hundred splits costs about what one without does.
 #pragma once
 
@@ -114,13 +114,12 @@ class FastSimulator final : public Simulator {
   };
   SplitCandidate split_candidate(int e) const;
   SplitPlan plan_split(const SplitCandidate& c);  ///< takes the new ids (serial, in event order)
-  bool apply_split(const SplitPlan& p);       ///< all of the split but msum of its springs
-  void update_split_msum(const SplitPlan& p); ///< msum [Eq 5] of the springs at its vertices
-  bool split_edge(int e);                     ///< plan, apply, msum: one split alone
+  bool apply_split(const SplitPlan& p);
+  bool split_edge(int e);                     ///< plan and apply: one split alone
   bool can_restore(int e) const;
-  void restore_edge(int e);                 ///< one restore alone, msum and free lists included
-  /// All of a restore but msum of its springs and the free lists (safe in parallel for restores
-  /// of disjoint vertices): returns what it freed, for Topology::free_ids.
+  void restore_edge(int e);                 ///< one restore alone, free lists included
+  /// All of a restore but the free lists (safe in parallel for restores of disjoint
+  /// vertices): returns what it freed, for Topology::free_ids.
   Freed restore_edge_local(int e);
 
   Params params_;

@@ -118,8 +118,6 @@ void FastSimulator::set_masses(const std::vector<double>& m) {
   Vertices& V = topo_.V;
   for (int k = 0; k < V.size() && k < int(m.size()); ++k)
     if (V.m[V.phys[k]] > 0) V.m[V.phys[k]] = float(m[k]);
-  for (int k = 0; k < V.size(); ++k)
-    if (V.m[k] > 0) topo_.update_msum(k);
 }
 
 }  // namespace crumple::fast

@@ -75,7 +75,7 @@ void vertex_normals(Topology& m, int begin, int end) {
 namespace {
 CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
                       const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                      const float* __restrict l0, const float* __restrict msum, const std::uint8_t* __restrict flags,
+                      const float* __restrict l0, const std::uint8_t* __restrict flags, const float* __restrict m,
                       const float* __restrict x, const float* __restrict y, const float* __restrict z,
                       const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
                       const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
@@ -86,11 +86,12 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::i
     const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
     const float inv = lt > 0 ? 1.0f / lt : 0.0f;
+    const float msum = m[a] + m[b];  // of the masses now: no per-edge copy to keep current
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
     const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
-    const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum[e] * inv;
-    const float kap = c.kappa * msum[e];
+    const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum * inv;
+    const float kap = c.kappa * msum;
     // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
     const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
     const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
@@ -101,7 +102,7 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::i
     const float ox = x[r] - x[l], oy = y[r] - y[l], oz = z[r] - z[l];
     const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
     const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
-    const float k = hinge ? sign * c.bend * msum[e] * Bmag : 0.0f;
+    const float k = hinge ? sign * c.bend * msum * Bmag : 0.0f;
     // Mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l (removed in the balanced form).
     out[e] = EdgeOut{s * dx, s * dy, s * dz, kap, kap * dvx, kap * dvy, kap * dvz, k,
                      quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
@@ -111,8 +112,8 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::i
 }  // namespace
 
 void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.msum.data(),
-                   m.E.flags.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
+  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.flags.data(),
+                   m.V.m.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
                    m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
 }
 

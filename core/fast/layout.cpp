@@ -207,7 +207,6 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   for (Array<std::int32_t>* a : {&E.wl, &E.wr}) permute(par, s, *a, eorder, vmap);
   for (Array<std::int32_t>* a : {&E.tri0, &E.tri1}) permute(par, s, *a, eorder, tmap);
   permute(par, s, E.l0, eorder);
-  permute(par, s, E.msum, eorder);
   permute(par, s, E.record, eorder);
   permute(par, s, E.lid, eorder);
   permute(par, s, E.flags, eorder);  // last: the loops above read the old flags

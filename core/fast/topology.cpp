@@ -39,7 +39,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   V.nbrs.reserve(nv * V.stride_e);
   V.tris.reserve(nv * V.stride_t);
   V.wings.reserve(nv * V.stride_t);
-  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out, E.lid, E.phys);
+  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
 }
 
@@ -83,7 +83,7 @@ void Topology::fit() {
     V.wings.resize(n * V.stride_t);
   }
   if (const std::size_t n = E.lid.size(); n != E.a.size())
-    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.msum, E.flags, E.record, E.out);
+    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
     grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
 }
@@ -111,7 +111,6 @@ void Topology::init_edge(int e, int a, int b, float l0) {
   E.b[e] = b;
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
   E.l0[e] = l0;
-  E.msum[e] = V.m[a] + V.m[b];
   E.flags[e] = kAlive | kMesh | kBreakable;
   E.out[e] = EdgeOut{};
   list_spring(a, e << 1, b);
@@ -129,7 +128,6 @@ void Topology::release_edge(int e) {
   E.a[e] = E.b[e] = 0;
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
   E.l0[e] = 1;
-  E.msum[e] = 0;
   E.flags[e] = 0;
   E.out[e] = EdgeOut{};
 }
@@ -223,13 +221,7 @@ void Topology::detach(int t) {
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
 }
 
-void Topology::update_msum(int v) {
-  const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
-  for (int k = 0; k < V.n_springs[v]; ++k) {
-    const int e = s[k] >> 1;
-    E.msum[e] = (s[k] & 1) ? V.m[nb[k]] + V.m[v] : V.m[v] + V.m[nb[k]];  // m_a + m_b, in that order
-  }
-}
+
 
 void Topology::list_spring(int v, int entry, int other) {
   if (V.n_springs[v] == V.stride_e) widen(true);
@@ -324,7 +316,6 @@ std::string Topology::check() const {
     const int a = E.a[e], b = E.b[e];
     if (a == b || vertex_dead[a] || vertex_dead[b]) return fail("edge ", e, " has a bad endpoint");
     if (!(E.l0[e] > 0)) return fail("edge ", e, " has rest length ", E.l0[e]);
-    if (E.msum[e] != V.m[a] + V.m[b]) return fail("edge ", e, " has a stale msum [Eq 5]");
     for (int end : {a, b}) {
       const std::int32_t* s = springs_of(end);
       const int want = (e << 1) | (end == b);

@@ -9,7 +9,7 @@
 // any logical id. Everything inside the backend (kernels, adjacency, records) speaks slots; only
 // the random stream, the event order and the Simulator interface speak logical ids. A freed slot
 // keeps its logical id, so reusing the id reuses the slot. A dead element keeps harmless values:
-// mass 0, no adjacency, an edge with msum 0 (zero stiffness) joining vertex 0 to itself.
+// mass 0, no adjacency, an edge in no list joining vertex 0 to itself (zero length, no force).
 //
 // Adjacency is what makes every force pass a race-free *gather*: each vertex lists its springs
 // and its triangles in fixed-stride slots (one cache line for typical valences); the stride
@@ -107,7 +107,6 @@ struct Edges {
                                  ///< wings, which [Eq 10] reads: the test needs no record)
   Array<std::int32_t> tri0, tri1;///< triangle traversing a->b / b->a (-1: none)
   Array<float> l0;               ///< rest length
-  Array<float> msum;             ///< m_a + m_b: kappa_e = kappa msum [Eq 5], C_beta,e = bend msum
   Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
   Array<EdgeOut> out;            ///< per-step output of the edge pass
@@ -180,8 +179,6 @@ class Topology {
   bool attach(int t, int a, int b, int c);
   void detach(int t);  ///< the inverse of attach (t stays allocated)
 
-  /// Updates msum of every spring at vertex v (after its mass changed) [Eq 5].
-  void update_msum(int v);
 
   int live_vertices() const;
   int live_mesh_edges() const;
