@@ -23,7 +23,9 @@ struct AlignedAllocator {
 
 /// One attribute of the SoA state. A copy keeps the room reserved in the original (a plain
 /// vector copy would not), so a clone of a simulator appends without reallocating, as the
-/// original does: the benchmarks time frames of clones.
+/// original does: the benchmarks time frames of clones. The room is faulted in when it is
+/// reserved or copied (warm), so that growth into it never page-faults inside a step: the
+/// real-time practice of touching a memory budget up front (docs/DECISIONS.md D16).
 template <class T>
 class Array : public std::vector<T, AlignedAllocator<T>> {
   using Base = std::vector<T, AlignedAllocator<T>>;
@@ -33,14 +35,26 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   Array() = default;
   Array(const Array& o) : Base() {
     this->reserve(o.capacity());
+    warm();
     this->assign(o.begin(), o.end());
   }
   Array& operator=(const Array& o) {
     if (this != &o) {
-      if (this->capacity() < o.capacity()) this->reserve(o.capacity());
+      if (this->capacity() < o.capacity()) this->reserve(o.capacity()), warm();
       this->assign(o.begin(), o.end());
     }
     return *this;
+  }
+  /// Reserves room for n elements with every page of it touched (see the class comment).
+  void reserve_warm(std::size_t n) {
+    this->reserve(n);
+    warm();
+  }
+  /// Touches every page of the reserved room (value-initializes it and shrinks back).
+  void warm() {
+    const std::size_t n = this->size();
+    this->resize(this->capacity());
+    this->resize(n);
   }
   Array(Array&&) noexcept = default;
   Array& operator=(Array&&) noexcept = default;

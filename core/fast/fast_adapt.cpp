@@ -95,6 +95,7 @@ void FastSimulator::adapt_decide() {
 StepEvents FastSimulator::adapt_apply() {
   StepEvents ev;
   ++pass_;
+  AdaptScratch& s = scratch_;  // the pass's temporaries, kept from pass to pass
   // The events, in parallel over fixed blocks of edges, each event as (logical id << 32 | slot).
   // They apply in ascending logical edge id (the order of MODEL.md §4 and of the reference). A
   // pending event's edge keeps its slot through the pass: splits free no edge, and restores free
@@ -102,7 +103,9 @@ StepEvents FastSimulator::adapt_apply() {
   const int n = int(decisions_.size());
   constexpr int kBlock = 16384;
   const int blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<std::uint64_t>> found(2 * std::size_t(blocks));
+  std::vector<std::vector<std::uint64_t>>& found = s.found;
+  found.resize(2 * std::size_t(blocks));
+  for (std::vector<std::uint64_t>& f : found) f.clear();
   par_.run(blocks, 1, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       const int end = std::min(n, (b + 1) * kBlock);
@@ -120,17 +123,20 @@ StepEvents FastSimulator::adapt_apply() {
       }
     }
   });
-  auto in_order = [&](int kind) {
-    std::vector<std::uint64_t> all;
+  auto in_order = [&](int kind, std::vector<int>& slots) {
+    std::vector<std::uint64_t>& all = s.events;
+    all.clear();
     for (int b = 0; b < blocks; ++b) all.insert(all.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
     std::sort(all.begin(), all.end());
-    std::vector<int> slots(all.size());
+    slots.resize(all.size());
     for (std::size_t k = 0; k < all.size(); ++k) slots[k] = int(std::uint32_t(all[k]));
-    return slots;
   };
-  const std::vector<int> splits = in_order(0), restores = in_order(1);
+  in_order(0, s.splits);
+  in_order(1, s.restores);
+  const std::vector<int>&splits = s.splits, &restores = s.restores;
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
-  std::vector<int> changed;  // triangles changed in this pass
+  std::vector<int>& changed = s.changed;  // triangles changed in this pass
+  changed.clear();
   auto stamp = [&](int t) {
     if (t < 0) return;
     if (t >= int(tri_stamp_.size())) tri_stamp_.resize(std::size_t(t) + 1, 0);
@@ -162,13 +168,15 @@ StepEvents FastSimulator::adapt_apply() {
   }
   const std::vector<int> no_splits;
   const std::vector<int>& round_splits = serial_splits_ ? no_splits : splits;
-  std::vector<SplitPlan> plans;
-  std::vector<int> round_of;
+  std::vector<SplitPlan>& plans = s.plans;
+  std::vector<int>& round_of = s.round_of;
+  plans.clear(), round_of.clear();
   // Per-vertex scratch, all 0 between passes (reset below for the vertices used): no pass
   // clears or allocates an array the size of the mesh.
   for (std::vector<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(nv0), 0);
   split_vertex_.resize(std::size_t(nv0), 0);
-  std::vector<int> involved;  // vertices of accepted splits (i, j, l, r), once each
+  std::vector<int>& involved = s.involved;  // vertices of accepted splits (i, j, l, r), once each
+  involved.clear();
   int rounds = 0, need_springs = 0, need_tris = 0;
   // What the serial pre-pass needs of each candidate, read in parallel into a compact array
   // (the pre-pass then touches only it, the stamps and the rounds).
@@ -225,14 +233,15 @@ StepEvents FastSimulator::adapt_apply() {
   }
   topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
   // The rounds, each a parallel loop over its splits (in event order within the round).
-  std::vector<int> by_round(plans.size()), start(std::size_t(rounds) + 2, 0);
+  std::vector<int>&by_round = s.by_round, &start = s.start;
+  by_round.resize(plans.size());
+  start.assign(std::size_t(rounds) + 2, 0);
   for (int r : round_of) ++start[r + 1];
   for (int r = 1; r <= rounds; ++r) start[r + 1] += start[r];
-  {
-    std::vector<int> fill(start.begin(), start.end());
-    for (std::size_t k = 0; k < plans.size(); ++k) by_round[fill[round_of[k]]++] = int(k);
-  }
-  std::vector<std::uint8_t> applied(plans.size(), 0);
+  s.fill.assign(start.begin(), start.end());
+  for (std::size_t k = 0; k < plans.size(); ++k) by_round[s.fill[round_of[k]]++] = int(k);
+  std::vector<std::uint8_t>& applied = s.applied;
+  applied.assign(plans.size(), 0);
   constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
   constexpr int kWaveGrain = 32;   // a restore costs about as much as a split (3-4 us)
   for (int r = 1; r <= rounds; ++r) {
@@ -285,10 +294,12 @@ StepEvents FastSimulator::adapt_apply() {
     }
   });
   claim_.resize(std::size_t(m.V.size()), 0);  // all 0 between waves
-  std::vector<int> pending, next, wave, claimed;
+  std::vector<int>&pending = s.pending, &next = s.next, &wave = s.wave, &claimed = s.claimed;
+  pending.clear();
   for (int k = 0; k < nr; ++k)
     if (candidates_[k].answer != kNever) pending.push_back(k);
-  std::vector<std::pair<int, Freed>> freed;  // (candidate, what its restore freed)
+  std::vector<std::pair<int, Freed>>& freed = s.freed;  // (candidate, what its restore freed)
+  freed.clear();
   for (bool first = true; !pending.empty(); first = false) {
     next.clear(), wave.clear(), claimed.clear();
     for (std::size_t q = 0; q < pending.size(); ++q) {
@@ -334,7 +345,8 @@ StepEvents FastSimulator::adapt_apply() {
   // changed, so the next step need not recompute them all (range kernels on single elements,
   // in parallel; each corner once).
   vertex_stamp_.resize(std::size_t(m.V.size()), 0);
-  std::vector<int> live, verts;
+  std::vector<int>&live = s.live, &verts = s.verts;
+  live.clear(), verts.clear();
   for (int t : changed) {
     if (!topo_.T.alive[t]) continue;
     live.push_back(t);

@@ -148,6 +148,21 @@ class FastSimulator final : public Simulator {
     std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)
   };
   std::vector<SplitCandidate> split_candidates_;  ///< this pass's split candidates, in event order
+  /// adapt_apply's temporaries, kept from pass to pass so that a pass allocates (and faults
+  /// in) no memory: fast_adapt.cpp says what each holds.
+  struct AdaptScratch {
+    std::vector<std::vector<std::uint64_t>> found;  ///< events per block and kind
+    std::vector<std::uint64_t> events;              ///< one kind's events, sorted
+    std::vector<int> splits, restores;              ///< event slots in event order
+    std::vector<int> changed;                       ///< triangles changed in the pass
+    std::vector<SplitPlan> plans;                   ///< accepted splits
+    std::vector<int> round_of, involved, by_round, start, fill;  ///< split rounds
+    std::vector<std::uint8_t> applied;              ///< per plan
+    std::vector<int> pending, next, wave, claimed;  ///< restore waves
+    std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
+    std::vector<int> live, verts;                   ///< renewal of areas and normals
+  };
+  AdaptScratch scratch_;
   std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction

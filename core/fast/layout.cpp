@@ -130,8 +130,7 @@ namespace {
 template <class T>
 void copy_warm(Array<T>& to, const Array<T>& from) {
   to.clear();
-  to.reserve(from.capacity());
-  to.resize(from.capacity());  // touches every page once
+  to.reserve_warm(from.capacity());
   to.resize(from.size());
 }
 }  // namespace

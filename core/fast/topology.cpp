@@ -28,17 +28,17 @@ void erase_slot(std::int32_t* list, std::int32_t* parallel, std::uint16_t& count
 namespace {
 template <class... A>
 void reserve_all(std::size_t n, A&... arrays) {
-  (arrays.reserve(n), ...);
+  (arrays.reserve_warm(n), ...);
 }
 }  // namespace
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next,
               V.rx, V.ry, V.rz, V.n_springs, V.n_tris, V.lid, V.phys);
-  V.springs.reserve(nv * V.stride_e);
-  V.nbrs.reserve(nv * V.stride_e);
-  V.tris.reserve(nv * V.stride_t);
-  V.wings.reserve(nv * V.stride_t);
+  V.springs.reserve_warm(nv * V.stride_e);
+  V.nbrs.reserve_warm(nv * V.stride_e);
+  V.tris.reserve_warm(nv * V.stride_t);
+  V.wings.reserve_warm(nv * V.stride_t);
   reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
 }
@@ -248,7 +248,9 @@ void Topology::widen(bool springs) {
   int& stride = springs ? V.stride_e : V.stride_t;
   const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
   for (Array<std::int32_t>* list : springs ? std::array{&V.springs, &V.nbrs} : std::array{&V.tris, &V.wings}) {
-    Array<std::int32_t> wider(std::size_t(V.size()) * stride * 2);
+    Array<std::int32_t> wider;
+    wider.reserve_warm(V.m.capacity() * stride * 2);  // the room the old list had, per vertex
+    wider.resize(std::size_t(V.size()) * stride * 2);
     for (int v = 0; v < V.size(); ++v)
       std::copy_n(&(*list)[std::size_t(v) * stride], count[v], &wider[std::size_t(v) * stride * 2]);
     list->swap(wider);
@@ -274,7 +276,7 @@ std::string Topology::check() const {
     return err.str();
   };
   // Logical ids and slots are inverse maps of each other, over the same range.
-  auto bijective = [](const auto& lid, const std::vector<std::int32_t>& phys) {
+  auto bijective = [](const auto& lid, const auto& phys) {
     if (lid.size() != phys.size()) return false;
     for (std::size_t k = 0; k < lid.size(); ++k)
       if (lid[k] < 0 || std::size_t(lid[k]) >= phys.size() || phys[std::size_t(lid[k])] != std::int32_t(k)) return false;

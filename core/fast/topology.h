@@ -91,7 +91,7 @@ struct Vertices {
   Array<std::uint16_t> n_springs; ///< used slots in springs
   Array<std::uint16_t> n_tris;    ///< used slots in tris
   Array<std::int32_t> lid;        ///< logical id of each slot
-  std::vector<std::int32_t> phys; ///< slot of each logical id (the inverse of lid)
+  Array<std::int32_t> phys; ///< slot of each logical id (the inverse of lid)
   int stride_e = 16;              ///< slots per vertex in springs
   int stride_t = 16;              ///< slots per vertex in tris
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
@@ -111,7 +111,7 @@ struct Edges {
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
   Array<EdgeOut> out;            ///< per-step output of the edge pass
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
-  std::vector<std::int32_t> phys;///< slot of each logical id
+  Array<std::int32_t> phys; ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
   std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
@@ -124,7 +124,7 @@ struct Triangles {
   Array<std::uint8_t> alive;       ///< 1: in use
   Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
   Array<std::int32_t> lid;         ///< logical id of each slot
-  std::vector<std::int32_t> phys;  ///< slot of each logical id
+  Array<std::int32_t> phys; ///< slot of each logical id
   std::vector<int> free_ids;       ///< LIFO free list of logical ids
   std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
