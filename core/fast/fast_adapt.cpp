@@ -96,43 +96,50 @@ StepEvents FastSimulator::adapt_apply() {
   StepEvents ev;
   ++pass_;
   AdaptScratch& s = scratch_;  // the pass's temporaries, kept from pass to pass
-  // The events, in parallel over fixed blocks of edges, each event as (logical id << 32 | slot).
-  // They apply in ascending logical edge id (the order of MODEL.md §4 and of the reference). A
-  // pending event's edge keeps its slot through the pass: splits free no edge, and restores free
-  // only mesh edges, never a pending (auxiliary) one.
+  // The events apply in ascending logical edge id (the order of MODEL.md §4 and of the
+  // reference). Two parallel passes over fixed blocks, no sort: the decisions (per slot) are
+  // copied to their logical ids, then read back in logical order, each block listing its
+  // events' slots. A pending event's edge keeps its slot through the pass: splits free no
+  // edge, and restores free only mesh edges, never a pending (auxiliary) one.
   const int n = int(decisions_.size());
   constexpr int kBlock = 16384;
   const int blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::vector<std::uint64_t>>& found = s.found;
+  by_id_.resize(std::size_t(n), 0);  // all 0 between passes
+  auto each_nonzero = [](const std::uint8_t* bytes, int begin, int end, auto&& f) {
+    for (int k = begin; k < end;) {
+      if (k + 8 <= end) {  // most decisions are 0: skip them eight at a time
+        std::uint64_t word;
+        std::memcpy(&word, bytes + k, 8);
+        if (word == 0) {
+          k += 8;
+          continue;
+        }
+      }
+      if (bytes[k]) f(k);
+      ++k;
+    }
+  };
+  par_.run(blocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b)
+      each_nonzero(decisions_.data(), b * kBlock, std::min(n, (b + 1) * kBlock),
+                   [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
+  });
+  std::vector<std::vector<int>>& found = s.found;  // per block and kind: slots in id order
   found.resize(2 * std::size_t(blocks));
-  for (std::vector<std::uint64_t>& f : found) f.clear();
   par_.run(blocks, 1, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
-      const int end = std::min(n, (b + 1) * kBlock);
-      for (int e = b * kBlock; e < end;) {
-        if (e + 8 <= end) {  // most decisions are 0: skip them eight at a time
-          std::uint64_t word;
-          std::memcpy(&word, &decisions_[e], 8);
-          if (word == 0) {
-            e += 8;
-            continue;
-          }
-        }
-        if (decisions_[e]) found[2 * b + decisions_[e] - 1].push_back(std::uint64_t(topo_.E.lid[e]) << 32 | std::uint32_t(e));
-        ++e;
-      }
+      found[2 * b].clear(), found[2 * b + 1].clear();
+      each_nonzero(by_id_.data(), b * kBlock, std::min(n, (b + 1) * kBlock), [&](int id) {
+        found[2 * b + by_id_[id] - 1].push_back(topo_.E.phys[id]);
+        by_id_[id] = 0;
+      });
     }
   });
-  auto in_order = [&](int kind, std::vector<int>& slots) {
-    std::vector<std::uint64_t>& all = s.events;
-    all.clear();
-    for (int b = 0; b < blocks; ++b) all.insert(all.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
-    std::sort(all.begin(), all.end());
-    slots.resize(all.size());
-    for (std::size_t k = 0; k < all.size(); ++k) slots[k] = int(std::uint32_t(all[k]));
-  };
-  in_order(0, s.splits);
-  in_order(1, s.restores);
+  for (int kind : {0, 1}) {
+    std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
+    slots.clear();
+    for (int b = 0; b < blocks; ++b) slots.insert(slots.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
+  }
   const std::vector<int>&splits = s.splits, &restores = s.restores;
   auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
   std::vector<int>& changed = s.changed;  // triangles changed in this pass

@@ -136,6 +136,7 @@ class FastSimulator final : public Simulator {
   double time_ = 0;
   std::uint64_t steps_ = 0;
   std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
+  std::vector<std::uint8_t> by_id_;       ///< the nonzero decisions per logical id (0 between passes)
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::vector<std::uint64_t> vertex_stamp_;  ///< pass that last renewed each vertex normal
   std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
@@ -151,8 +152,7 @@ class FastSimulator final : public Simulator {
   /// adapt_apply's temporaries, kept from pass to pass so that a pass allocates (and faults
   /// in) no memory: fast_adapt.cpp says what each holds.
   struct AdaptScratch {
-    std::vector<std::vector<std::uint64_t>> found;  ///< events per block and kind
-    std::vector<std::uint64_t> events;              ///< one kind's events, sorted
+    std::vector<std::vector<int>> found;            ///< event slots per block of ids and kind
     std::vector<int> splits, restores;              ///< event slots in event order
     std::vector<int> changed;                       ///< triangles changed in the pass
     std::vector<SplitPlan> plans;                   ///< accepted splits
