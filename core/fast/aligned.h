@@ -2,6 +2,7 @@
 // contiguous array, 64-byte aligned so that AVX-512 loads of a lane group never split a line.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <new>
 #include <vector>
@@ -23,9 +24,11 @@ struct AlignedAllocator {
 
 /// One attribute of the SoA state. A copy keeps the room reserved in the original (a plain
 /// vector copy would not), so a clone of a simulator appends without reallocating, as the
-/// original does: the benchmarks time frames of clones. The room is faulted in when it is
-/// reserved or copied (warm), so that growth into it never page-faults inside a step: the
-/// real-time practice of touching a memory budget up front (docs/DECISIONS.md D16).
+/// original does: the benchmarks time frames of clones. Part of the room ahead of the elements
+/// is kept faulted in (an eighth of the capacity: some twenty frames of a crumple's growth),
+/// so that growth into it does not page-fault inside a step; the next part is touched when
+/// growth uses it up (keep_warm), one burst where there were hundreds of single faults
+/// (docs/DECISIONS.md D16).
 template <class T>
 class Array : public std::vector<T, AlignedAllocator<T>> {
   using Base = std::vector<T, AlignedAllocator<T>>;
@@ -35,27 +38,37 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   Array() = default;
   Array(const Array& o) : Base() {
     this->reserve(o.capacity());
-    warm();
     this->assign(o.begin(), o.end());
+    keep_warm();
   }
   Array& operator=(const Array& o) {
     if (this != &o) {
-      if (this->capacity() < o.capacity()) this->reserve(o.capacity()), warm();
+      if (this->capacity() < o.capacity()) this->reserve(o.capacity()), warmed_ = 0;
       this->assign(o.begin(), o.end());
+      keep_warm();
     }
     return *this;
   }
-  /// Reserves room for n elements with every page of it touched (see the class comment).
+  /// Reserves room for n elements, the first part of it faulted in (see the class comment).
   void reserve_warm(std::size_t n) {
     this->reserve(n);
-    warm();
+    keep_warm();
   }
-  /// Touches every page of the reserved room (value-initializes it and shrinks back).
-  void warm() {
+  void swap(Array& o) noexcept {
+    Base::swap(o);
+    std::swap(warmed_, o.warmed_);
+  }
+  /// Faults in the room ahead of the elements once growth has used up what was touched.
+  void keep_warm() {
     const std::size_t n = this->size();
-    this->resize(this->capacity());
+    if (n < warmed_ && warmed_ <= this->capacity()) return;
+    warmed_ = std::min(this->capacity(), n + this->capacity() / 8);
+    this->resize(warmed_);  // value-initializes, touching each page
     this->resize(n);
   }
+
+ private:
+  std::size_t warmed_ = 0;  ///< elements [size, warmed_) of the room are faulted in
   Array(Array&&) noexcept = default;
   Array& operator=(Array&&) noexcept = default;
 };

@@ -130,8 +130,9 @@ namespace {
 template <class T>
 void copy_warm(Array<T>& to, const Array<T>& from) {
   to.clear();
-  to.reserve_warm(from.capacity());
-  to.resize(from.size());
+  to.reserve(from.capacity());
+  to.resize(from.size());  // touches what relayout writes, and then the room ahead
+  to.keep_warm();
 }
 }  // namespace
 

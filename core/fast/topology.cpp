@@ -11,6 +11,7 @@ namespace {
 template <class... A>
 void grow(std::size_t n, A&... arrays) {
   (arrays.resize(n), ...);
+  (arrays.keep_warm(), ...);
 }
 
 // Erases `entry` from a slot list of `count` items and the same slot of its parallel list,
@@ -77,11 +78,10 @@ void Topology::fit() {
   if (const std::size_t n = V.lid.size(); n != V.m.size()) {
     grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.rx,
          V.ry, V.rz, V.n_springs, V.n_tris);
-    V.springs.resize(n * V.stride_e);
-    V.nbrs.resize(n * V.stride_e);
-    V.tris.resize(n * V.stride_t);
-    V.wings.resize(n * V.stride_t);
+    grow(n * V.stride_e, V.springs, V.nbrs);
+    grow(n * V.stride_t, V.tris, V.wings);
   }
+  for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
   if (const std::size_t n = E.lid.size(); n != E.a.size())
     grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
