@@ -1,6 +1,7 @@
-// The adaptive mesh of the fast backend (MODEL.md §4, §5, §7): decisions by the adapt_test
-// kernel in parallel, then the serial edits, in the same order and with the same id policy as
-// the reference backend. Mass and momentum bookkeeping is done in double and stored in float.
+// The adaptive mesh of the fast backend (MODEL.md §4, §5, §7), the topology pass: decisions by
+// the adapt_test kernel in parallel, then the events in the order of the reference backend
+// (splits in parallel rounds, restores in parallel waves, each with the serial result), then the
+// areas and normals renewed where triangles changed. One event's edits are in fast_edits.cpp.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -13,19 +14,6 @@ namespace crumple::fast {
 
 namespace {
 constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §4)
-
-struct D3 {
-  double x = 0, y = 0, z = 0;
-};
-double norm(const D3& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
-
-// Triangle t's corners with `from` replaced by `to`, keeping the rotation.
-std::array<int, 3> replaced(const Triangles& T, int t, int from, int to) {
-  std::array<int, 3> v = T.corners(t);
-  for (int& k : v)
-    if (k == from) k = to;
-  return v;
-}
 
 template <class T>
 void prefetch(const T* p) {
@@ -68,13 +56,14 @@ void prefetch_restore(const Topology& m, int e) {
   }
 }
 
-bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
-  if (t < 0 || t >= T.size() || !T.alive[t]) return false;
-  const auto v = T.corners(t);
-  for (int k = 0; k < 3; ++k)
-    if (v[k] == a && v[(k + 1) % 3] == b && v[(k + 2) % 3] == c) return true;
-  return false;
-}
+// Each event touches a few hundred bytes in some fifty cache lines of the SoA arrays, far from
+// the previous event's: prefetching the next events' lines while one applies overlaps those
+// misses (the events themselves still apply in order). kFar ahead: the first lines (the edge,
+// the record); kNear ahead: what those lines point to.
+constexpr int kFar = 8, kNear = 3;
+constexpr int kRoundGrain = 64;  ///< smaller split rounds run inline: a parallel loop costs ~10 us
+constexpr int kWaveGrain = 32;   ///< a restore costs about as much as a split (3-4 us)
+
 }  // namespace
 
 void FastSimulator::adapt_decide() {
@@ -93,9 +82,27 @@ void FastSimulator::adapt_decide() {
 }
 
 StepEvents FastSimulator::adapt_apply() {
-  StepEvents ev;
   ++pass_;
-  AdaptScratch& s = scratch_;  // the pass's temporaries, kept from pass to pass
+  collect_events();
+  scratch_.changed.clear();
+  StepEvents ev;
+  ev.splits = apply_splits();
+  ev.restores = apply_restores();
+  renew_normals();
+  return ev;
+}
+
+bool FastSimulator::touched(int t) const { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; }
+
+void FastSimulator::stamp(int t) {
+  if (t < 0) return;
+  if (t >= int(tri_stamp_.size())) tri_stamp_.resize(std::size_t(t) + 1, 0);
+  if (tri_stamp_[t] != pass_) scratch_.changed.push_back(t);
+  tri_stamp_[t] = pass_;
+}
+
+void FastSimulator::collect_events() {
+  AdaptScratch& s = scratch_;
   // The events apply in ascending logical edge id (the order of MODEL.md §4 and of the
   // reference). Two parallel passes over fixed blocks, no sort: the decisions (per slot) are
   // copied to their logical ids, then read back in logical order, each block listing its
@@ -140,21 +147,11 @@ StepEvents FastSimulator::adapt_apply() {
     slots.clear();
     for (int b = 0; b < blocks; ++b) slots.insert(slots.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
   }
-  const std::vector<int>&splits = s.splits, &restores = s.restores;
-  auto touched = [&](int t) { return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_; };
-  std::vector<int>& changed = s.changed;  // triangles changed in this pass
-  changed.clear();
-  auto stamp = [&](int t) {
-    if (t < 0) return;
-    if (t >= int(tri_stamp_.size())) tri_stamp_.resize(std::size_t(t) + 1, 0);
-    if (tri_stamp_[t] != pass_) changed.push_back(t);
-    tri_stamp_[t] = pass_;
-  };
-  // Each event touches a few hundred bytes in some fifty cache lines of the SoA arrays, far
-  // from the previous event's: prefetching the next events' lines while one applies overlaps
-  // those misses (the events themselves still apply one by one, in order).
+}
+
+int FastSimulator::apply_splits() {
+  AdaptScratch& s = scratch_;
   const Topology& m = topo_;
-  constexpr int kFar = 8, kNear = 3;
   // Splits. Acceptance and new ids are decided first, serially in event order: a split is
   // skipped when an earlier accepted split of the pass changed one of its edge's two
   // triangles, and those are still the triangles it had at the start of the pass (a split
@@ -166,15 +163,16 @@ StepEvents FastSimulator::adapt_apply() {
   // (docs/DECISIONS.md D13).
   const int nv0 = m.V.size();
   if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
-    for (int e : splits) {
+    int done = 0;
+    for (int e : s.splits) {
       if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
       if (!split_edge(e)) continue;
       for (int t : m.records[m.E.record[e]].t) stamp(t);
-      ++ev.splits;
+      ++done;
     }
+    return done;
   }
-  const std::vector<int> no_splits;
-  const std::vector<int>& round_splits = serial_splits_ ? no_splits : splits;
+  const std::vector<int>& round_splits = s.splits;
   std::vector<SplitPlan>& plans = s.plans;
   std::vector<int>& round_of = s.round_of;
   plans.clear(), round_of.clear();
@@ -249,8 +247,6 @@ StepEvents FastSimulator::adapt_apply() {
   for (std::size_t k = 0; k < plans.size(); ++k) by_round[s.fill[round_of[k]]++] = int(k);
   std::vector<std::uint8_t>& applied = s.applied;
   applied.assign(plans.size(), 0);
-  constexpr int kRoundGrain = 64;  // smaller rounds run inline: a parallel loop costs ~10 us
-  constexpr int kWaveGrain = 32;   // a restore costs about as much as a split (3-4 us)
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start[r + 1] - start[r] > kRoundGrain;
     par_.run(start[r + 1] - start[r], kRoundGrain, [&](int b, int e) {
@@ -262,7 +258,13 @@ StepEvents FastSimulator::adapt_apply() {
     });
   }
   for (int v : involved) split_vertex_[v] = 0;
-  for (std::uint8_t a : applied) ev.splits += a;
+  return int(std::count(applied.begin(), applied.end(), std::uint8_t(1)));
+}
+
+int FastSimulator::apply_restores() {
+  AdaptScratch& s = scratch_;
+  const Topology& m = topo_;
+  auto is_touched = [&](int t) { return touched(t); };
   // Restores, in waves (docs/DECISIONS.md D14). A restore reads and writes only its own
   // vertices {n, i, j, l, r} with their lists, edges and triangles, so a candidate's answer
   // can change only through an earlier candidate sharing one of its vertices. A wave scans the
@@ -274,16 +276,18 @@ StepEvents FastSimulator::adapt_apply() {
   // serial result, bit for bit. The first wave's answers are pre-tested in parallel, so its
   // serial scan reads only a compact array and the claims.
   if (serial_splits_) {  // the definition the waves reproduce
-    for (int e : restores) {
+    int done = 0;
+    for (int e : s.restores) {
       const SplitRecord& r = m.records[m.E.record[e]];
-      if (std::any_of(r.t.begin(), r.t.end(), touched) || !can_restore(e)) continue;
+      if (std::any_of(r.t.begin(), r.t.end(), is_touched) || !can_restore(e)) continue;
       const auto t = r.t;
       restore_edge(e);
       for (int q : t) stamp(q);
-      ++ev.restores;
+      ++done;
     }
+    return done;
   }
-  const std::vector<int>& wave_restores = serial_splits_ ? no_splits : restores;
+  const std::vector<int>& wave_restores = s.restores;
   const int nr = int(wave_restores.size());
   enum : std::uint8_t { kNever, kNotNow, kRestorable };  // a candidate's answer on the state after the splits
   candidates_.resize(std::size_t(nr));
@@ -292,9 +296,9 @@ StepEvents FastSimulator::adapt_apply() {
       if (k + kNear < e) prefetch(&m.records[m.E.record[wave_restores[k + kNear]]]);
       const int edge = wave_restores[k];
       const SplitRecord& r = m.records[m.E.record[edge]];
-      // touched() sees the splits' stamps only: a restore's stamps matter to candidates that
-      // share its vertices, which wait for a later wave and test touched() again there.
-      const std::uint8_t answer = std::any_of(r.t.begin(), r.t.end(), touched) ? kNever
+      // is_touched sees the splits' stamps only: a restore's stamps matter to candidates that
+      // share its vertices, which wait for a later wave and test it again there.
+      const std::uint8_t answer = std::any_of(r.t.begin(), r.t.end(), is_touched) ? kNever
                                   : can_restore(edge)                           ? kRestorable
                                                                                 : kNotNow;
       candidates_[k] = RestoreCandidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
@@ -320,7 +324,7 @@ StepEvents FastSimulator::adapt_apply() {
         if (first && candidates_[k].answer != kRestorable) continue;
         if (!first) {
           const SplitRecord& r = m.records[m.E.record[e]];
-          if (std::any_of(r.t.begin(), r.t.end(), touched) || !can_restore(e)) continue;
+          if (std::any_of(r.t.begin(), r.t.end(), is_touched) || !can_restore(e)) continue;
         }
       }
       for (int v : verts)
@@ -347,14 +351,18 @@ StepEvents FastSimulator::adapt_apply() {
   }
   std::sort(freed.begin(), freed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& f : freed) topo_.free_ids(f.second);
-  ev.restores += int(freed.size());
+  return int(freed.size());
+}
+
+void FastSimulator::renew_normals() {
+  AdaptScratch& s = scratch_;
   // Bring the areas and normals computed for the decisions up to date where the topology
   // changed, so the next step need not recompute them all (range kernels on single elements,
   // in parallel; each corner once).
-  vertex_stamp_.resize(std::size_t(m.V.size()), 0);
+  vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
   std::vector<int>&live = s.live, &verts = s.verts;
   live.clear(), verts.clear();
-  for (int t : changed) {
+  for (int t : s.changed) {
     if (!topo_.T.alive[t]) continue;
     live.push_back(t);
     for (int v : topo_.T.corners(t))
@@ -367,7 +375,6 @@ StepEvents FastSimulator::adapt_apply() {
     for (int k = b; k < e; ++k) vertex_normals(topo_, verts[k], verts[k] + 1);
   });
   normals_valid_ = true;
-  return ev;
 }
 
 StepEvents FastSimulator::adapt() {
@@ -382,218 +389,6 @@ StepEvents FastSimulator::adapt() {
     ev = adapt_apply();
   }
   return ev;
-}
-
-FastSimulator::SplitCandidate FastSimulator::split_candidate(int e) const {
-  const Edges& E = topo_.E;
-  SplitCandidate c;
-  if (E.flags[e] != (kAlive | kMesh | kBreakable)) return c;
-  c.e = e;
-  c.tris = {E.tri0[e], E.tri1[e]};
-  c.ends = {E.a[e], E.b[e], E.wl[e], E.wr[e]};
-  c.flat_draw = float(uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::FlatSign));
-  return c;
-}
-
-FastSimulator::SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
-  Topology& m = topo_;
-  SplitPlan p;
-  if (c.e < 0) return p;
-  p.e = c.e;
-  p.flat_draw = c.flat_draw;
-  p.ends = c.ends;
-  // The order in which a split allocates (the id policy of sim/simulator.h).
-  p.n = m.take_vertex();
-  p.edges[0] = m.take_edge();
-  p.edges[1] = m.take_edge();
-  if (c.ends[2] >= 0) p.edges[2] = m.take_edge();
-  if (c.ends[3] >= 0) p.edges[3] = m.take_edge();
-  if (c.tris[0] >= 0) p.tris[0] = m.take_triangle();
-  if (c.tris[1] >= 0) p.tris[1] = m.take_triangle();
-  p.record = m.take_record();
-  return p;
-}
-
-bool FastSimulator::split_edge(int e) {
-  const SplitPlan p = plan_split(split_candidate(e));
-  if (p.e < 0) return false;
-  topo_.fit();
-  return apply_split(p);
-}
-
-bool FastSimulator::apply_split(const SplitPlan& plan) {
-  Topology& m = topo_;
-  Vertices& V = m.V;
-  const int e = plan.e;
-  const float flat_draw = plan.flat_draw;
-  const int i = m.E.a[e], j = m.E.b[e], tL = m.E.tri0[e], tR = m.E.tri1[e];
-  const int l = m.E.wl[e], r = m.E.wr[e];
-  const D3 xi{V.x[i], V.y[i], V.z[i]}, xj{V.x[j], V.y[j], V.z[j]};
-  const D3 d{xj.x - xi.x, xj.y - xi.y, xj.z - xi.z};
-  const double lt = norm(d), l0 = m.E.l0[e];
-
-  // [Eq 7] x_n = (x_i + x_j)/2 + s theta nu; nu from the adjacent face normals.
-  D3 nu;
-  for (int t : {tL, tR}) {
-    if (t < 0) continue;
-    const D3 w{m.T.area[t].x, m.T.area[t].y, m.T.area[t].z};
-    const double len = norm(w);
-    if (len > 0) nu = {nu.x + w.x / len, nu.y + w.y / len, nu.z + w.z / len};
-  }
-  if (!(norm(nu) > 1e-12)) nu = {double(V.nx[i]) + V.nx[j], double(V.ny[i]) + V.ny[j], double(V.nz[i]) + V.nz[j]};
-  const double nlen = norm(nu);
-  nu = nlen > 1e-12 ? D3{nu.x / nlen, nu.y / nlen, nu.z / nlen} : D3{};
-  const double theta = 0.5 * params_.psi * std::sqrt(std::max(0.0, l0 * l0 - lt * lt));
-  const double curl = (double(V.nx[j]) - V.nx[i]) * d.x + (double(V.ny[j]) - V.ny[i]) * d.y + (double(V.nz[j]) - V.nz[i]) * d.z;
-  const double s = std::abs(curl) <= 1e-6 * lt ? (flat_draw < 0.5f ? -1.0 : 1.0) : (curl > 0 ? 1.0 : -1.0);
-
-  // [Eq 3] masses of N = {i, j, l, r}; [Eq 4] the new vertex's momentum.
-  const D3 Xn{0.5 * (double(V.rx[i]) + V.rx[j]), 0.5 * (double(V.ry[i]) + V.ry[j]), 0.5 * (double(V.rz[i]) + V.rz[j])};
-  auto rest_dist = [&](int k) { return norm({V.rx[k] - Xn.x, V.ry[k] - Xn.y, V.rz[k] - Xn.z}); };
-  SplitRecord rec;
-  rec.k = {i, j, l, r};
-  rec.l0 = l0;
-  double dsum = 0;
-  for (int k : rec.k)
-    if (k >= 0) dsum += rest_dist(k);
-  double mn = 0;
-  D3 pn;
-  for (int q = 0; q < 4; ++q) {
-    const int k = rec.k[q];
-    if (k < 0) continue;
-    rec.delta[q] = rest_dist(k) / dsum;
-    const float m_new = float(0.5 * (std::pow(rec.delta[q], 1.0 / params_.varphi) + 1.0) * V.m[k]);
-    rec.dm[q] = double(V.m[k] - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
-    V.m[k] = m_new;
-    mn += rec.dm[q];
-    pn = {pn.x + rec.dm[q] * V.vx[k], pn.y + rec.dm[q] * V.vy[k], pn.z + rec.dm[q] * V.vz[k]};
-  }
-
-  const int n = plan.n;
-  m.init_vertex(n);
-  V.rx[n] = float(Xn.x), V.ry[n] = float(Xn.y), V.rz[n] = float(Xn.z);
-  V.x[n] = float(0.5 * (xi.x + xj.x) + s * theta * nu.x);
-  V.y[n] = float(0.5 * (xi.y + xj.y) + s * theta * nu.y);
-  V.z[n] = float(0.5 * (xi.z + xj.z) + s * theta * nu.z);
-  V.m[n] = float(mn);
-  V.vx[n] = float(pn.x / mn), V.vy[n] = float(pn.y / mn), V.vz[n] = float(pn.z / mn);
-  V.nx[n] = float(nu.x), V.ny[n] = float(nu.y), V.nz[n] = float(nu.z);
-  for (int t : {tL, tR})
-    if (t >= 0) m.detach(t);
-  // e_ij becomes an auxiliary spring holding the crease at its current length, with the
-  // crease's wings in its wing slots (for [Eq 10]).
-  m.E.flags[e] = kAlive;
-  m.E.wl[e] = l;
-  m.E.wr[e] = r;
-  m.E.l0[e] = float(lt);
-  rec.n = n;
-  rec.e = plan.edges;
-  m.init_edge(rec.e[0], i, n, float(l0 / 2));
-  m.init_edge(rec.e[1], n, j, float(l0 / 2));
-  if (l >= 0) m.init_edge(rec.e[2], l, n, float(rest_dist(l)));
-  if (r >= 0) m.init_edge(rec.e[3], n, r, float(rest_dist(r)));
-  if (tL >= 0) rec.t[0] = tL, rec.t[1] = plan.tris[0], m.init_triangle(plan.tris[0]);
-  if (tR >= 0) rec.t[2] = tR, rec.t[3] = plan.tris[1], m.init_triangle(plan.tris[1]);
-  bool ok = true;
-  if (tL >= 0) {
-    const auto v = replaced(m.T, tL, j, n);
-    ok &= m.attach(tL, v[0], v[1], v[2]);
-    ok &= m.attach(rec.t[1], n, j, l);
-  }
-  if (tR >= 0) {
-    const auto v = replaced(m.T, tR, i, n);
-    ok &= m.attach(tR, v[0], v[1], v[2]);
-    ok &= m.attach(rec.t[3], n, i, r);
-  }
-  m.records[plan.record] = rec;
-  m.E.record[e] = plan.record;
-  return ok;
-}
-
-bool FastSimulator::can_restore(int e) const {
-  const Topology& m = topo_;
-  if (e < 0 || e >= m.E.size() || m.E.flags[e] != kAlive || m.E.record[e] < 0) return false;
-  const SplitRecord& s = m.records[m.E.record[e]];
-  const int i = s.k[0], j = s.k[1], l = s.k[2], r = s.k[3], n = s.n;
-  if (!(m.V.m[n] > 0)) return false;
-  const int ends[4][2] = {{i, n}, {n, j}, {l, n}, {n, r}};
-  int expected = 0;
-  for (int q = 0; q < 4; ++q) {
-    if (s.k[q] < 0) continue;
-    const int id = s.e[q];
-    if (m.E.flags[id] != (kAlive | kMesh | kBreakable)) return false;  // [Eq 10]
-    const int a = m.E.a[id], b = m.E.b[id];
-    if (!((a == ends[q][0] && b == ends[q][1]) || (a == ends[q][1] && b == ends[q][0]))) return false;
-    ++expected;
-  }
-  if (m.V.n_springs[n] != expected) return false;  // n still has exactly its own edges
-  if (l >= 0 && !(is_triangle(m.T, s.t[0], i, n, l) && is_triangle(m.T, s.t[1], n, j, l))) return false;
-  if (r >= 0 && !(is_triangle(m.T, s.t[2], j, n, r) && is_triangle(m.T, s.t[3], n, i, r))) return false;
-  return true;
-}
-
-void FastSimulator::restore_edge(int e) { topo_.free_ids(restore_edge_local(e)); }
-
-Freed FastSimulator::restore_edge_local(int e) {
-  Topology& m = topo_;
-  Vertices& V = m.V;
-  const int rid = m.E.record[e];
-  const SplitRecord s = m.records[rid];
-  const int i = s.k[0], j = s.k[1], n = s.n;
-  const double mn = V.m[n];
-  const D3 vn{V.vx[n], V.vy[n], V.vz[n]};
-  if (params_.restore == RestoreForm::Exact) {
-    double dsum = 0;
-    for (int q = 0; q < 4; ++q)
-      if (s.k[q] >= 0) dsum += s.dm[q];
-    for (int q = 0; q < 4; ++q) {
-      const int k = s.k[q];
-      if (k < 0) continue;
-      const double mk = V.m[k], m_new = mk + mn * s.dm[q] / dsum;
-      V.vx[k] = float((mk * V.vx[k] + (m_new - mk) * vn.x) / m_new);
-      V.vy[k] = float((mk * V.vy[k] + (m_new - mk) * vn.y) / m_new);
-      V.vz[k] = float((mk * V.vz[k] + (m_new - mk) * vn.z) / m_new);
-      V.m[k] = float(m_new);
-    }
-  } else {
-    double msum = 0;
-    for (int q = 0; q < 4; ++q) {
-      const int k = s.k[q];
-      if (k < 0) continue;
-      V.m[k] = float(2.0 * V.m[k] / (std::pow(s.delta[q], 1.0 / params_.varphi) + 1.0));  // [Eq 11]
-      msum += V.m[k];
-    }
-    for (int q = 0; q < 4; ++q) {
-      const int k = s.k[q];
-      if (k < 0) continue;
-      V.vx[k] = float(V.vx[k] + mn * vn.x / msum);  // [Eq 12]
-      V.vy[k] = float(V.vy[k] + mn * vn.y / msum);
-      V.vz[k] = float(V.vz[k] + mn * vn.z / msum);
-    }
-  }
-  for (int t : s.t)
-    if (t >= 0) m.detach(t);
-  Freed freed;
-  for (int q = 0; q < 4; ++q)
-    if (s.e[q] >= 0) m.release_edge(s.e[q]), freed.edges[q] = s.e[q];
-  if (s.t[1] >= 0) m.release_triangle(s.t[1]), freed.tris[0] = s.t[1];
-  if (s.t[3] >= 0) m.release_triangle(s.t[3]), freed.tris[1] = s.t[3];
-  m.release_vertex(n);
-  freed.vertex = n;
-  freed.record = rid;
-  m.E.flags[e] = kAlive | kMesh | kBreakable;
-  m.E.l0[e] = float(s.l0);
-  m.E.record[e] = -1;
-  m.E.wl[e] = m.E.wr[e] = -1;  // attach below links its triangles' wings
-  if (s.t[0] >= 0) {
-    const auto v = replaced(m.T, s.t[0], n, j);
-    m.attach(s.t[0], v[0], v[1], v[2]);
-  }
-  if (s.t[2] >= 0) {
-    const auto v = replaced(m.T, s.t[2], n, i);
-    m.attach(s.t[2], v[0], v[1], v[2]);
-  }
-  return freed;
 }
 
 std::vector<Decision> FastSimulator::decide() const {

@@ -119,6 +119,15 @@ class FastSimulator final : public Simulator {
     std::array<int, 2> tris{-1, -1};     ///< (n,j,l), (n,i,r)
     int record = -1;                     ///< the split record
   };
+  // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13), the
+  // restores in waves (D14), then the areas and normals renewed where triangles changed.
+  void collect_events();
+  int apply_splits();   ///< returns the splits applied
+  int apply_restores(); ///< returns the restores applied
+  void renew_normals();
+  bool touched(int t) const;  ///< triangle t was changed by this pass
+  void stamp(int t);          ///< marks triangle t changed by this pass
+  // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;
   SplitPlan plan_split(const SplitCandidate& c);  ///< takes the new ids (serial, in event order)
   bool apply_split(const SplitPlan& p);
