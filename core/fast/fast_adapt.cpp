@@ -3,6 +3,7 @@
 // (splits in parallel rounds, restores in parallel waves, each with the serial result), then the
 // areas and normals renewed where triangles changed. One event's edits are in fast_edits.cpp.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -355,24 +356,27 @@ int FastSimulator::apply_restores() {
 }
 
 void FastSimulator::renew_normals() {
-  AdaptScratch& s = scratch_;
   // Bring the areas and normals computed for the decisions up to date where the topology
-  // changed, so the next step need not recompute them all (range kernels on single elements,
-  // in parallel; each corner once).
+  // changed, so the next step need not recompute them all: the changed triangles' areas (a dead
+  // one gets the zero it has), then the normal of each of their corners, once, by whichever
+  // thread claims it first (each normal is a function of the areas alone, so who computes it
+  // and in which order changes nothing).
+  const std::vector<int>& changed = scratch_.changed;
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
-  std::vector<int>&live = s.live, &verts = s.verts;
-  live.clear(), verts.clear();
-  for (int t : s.changed) {
-    if (!topo_.T.alive[t]) continue;
-    live.push_back(t);
-    for (int v : topo_.T.corners(t))
-      if (vertex_stamp_[v] != pass_) vertex_stamp_[v] = pass_, verts.push_back(v);
-  }
-  par_.run(int(live.size()), 512, [&](int b, int e) {
-    for (int k = b; k < e; ++k) triangle_areas(topo_, live[k], live[k] + 1);
+  par_.run(int(changed.size()), 512, [&](int b, int e) {
+    for (int k = b; k < e; ++k) triangle_areas(topo_, changed[k], changed[k] + 1);
   });
-  par_.run(int(verts.size()), 512, [&](int b, int e) {
-    for (int k = b; k < e; ++k) vertex_normals(topo_, verts[k], verts[k] + 1);
+  par_.run(int(changed.size()), 512, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      const int t = changed[k];
+      if (!topo_.T.alive[t]) continue;
+      for (int v : topo_.T.corners(t)) {
+        std::atomic_ref<std::uint64_t> mark(vertex_stamp_[v]);
+        std::uint64_t seen = mark.load(std::memory_order_relaxed);
+        if (seen != pass_ && mark.compare_exchange_strong(seen, pass_, std::memory_order_relaxed))
+          vertex_normals(topo_, v, v + 1);
+      }
+    }
   });
   normals_valid_ = true;
 }

@@ -169,7 +169,6 @@ class FastSimulator final : public Simulator {
     std::vector<std::uint8_t> applied;              ///< per plan
     std::vector<int> pending, next, wave, claimed;  ///< restore waves
     std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
-    std::vector<int> live, verts;                   ///< renewal of areas and normals
   };
   AdaptScratch scratch_;
   std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
