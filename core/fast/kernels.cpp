@@ -6,7 +6,11 @@
 #include "fast/wide.h"
 #include "model/random.h"
 
+#if CRUMPLE_DISABLE_SIMD
+#define CRUMPLE_SIMD_LOOP  // the no-SIMD build: no vectorization hints (and no unknown-pragma warnings)
+#else
 #define CRUMPLE_SIMD_LOOP _Pragma("omp simd")
+#endif
 #define CRUMPLE_SCALAR_KERNEL [[gnu::optimize("no-tree-vectorize")]]
 
 namespace crumple::fast {
