@@ -32,6 +32,9 @@ while (($#)); do
 done
 
 "$root/scripts/install_deps.sh"
+# The revision measured, taken before the run writes its results (they are tracked files, so a
+# label taken afterwards would always read -dirty).
+rev=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
 
 build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
@@ -100,7 +103,7 @@ elapsed=$(($(date +%s) - start))
 
 "$py" "$root/scripts/machine_info.py" --json > "$dest/machine.json"
 "$py" - "$dest/run.json" "$dest/machine.json" "$elapsed" "$quick" "$reps" "$min_time" "$filter" \
-      "$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)" "${main_cmd[*]}" <<'PY'
+      "$rev" "${main_cmd[*]}" <<'PY'
 import json, sys, datetime
 out, machine, elapsed, quick, reps, min_time, flt, rev, cmd = sys.argv[1:]
 with open(machine) as f:
