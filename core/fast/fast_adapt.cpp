@@ -163,7 +163,7 @@ int FastSimulator::apply_splits() {
   // still receives its edits in event order: the result is the serial one, bit for bit
   // (docs/DECISIONS.md D13).
   const int nv0 = m.V.size();
-  if (serial_splits_) {  // the definition the rounds reproduce: one split after the other
+  if (serial_edits_) {  // the definition the rounds reproduce: one split after the other
     int done = 0;
     for (int e : s.splits) {
       if (touched(m.E.tri0[e]) || touched(m.E.tri1[e])) continue;
@@ -276,7 +276,7 @@ int FastSimulator::apply_restores() {
   // event order, and the freed ids reach the free lists in event order after the waves: the
   // serial result, bit for bit. The first wave's answers are pre-tested in parallel, so its
   // serial scan reads only a compact array and the claims.
-  if (serial_splits_) {  // the definition the waves reproduce
+  if (serial_edits_) {  // the definition the waves reproduce
     int done = 0;
     for (int e : s.restores) {
       const SplitRecord& r = m.records[m.E.record[e]];

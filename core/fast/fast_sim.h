@@ -87,7 +87,7 @@ class FastSimulator final : public Simulator {
   void set_layout_fraction(double f) { layout_fraction_ = f; }
   /// Test hook: apply a pass's splits and restores one after the other instead of in parallel
   /// rounds and waves (which must give the same result, bit for bit).
-  void set_serial_splits(bool on) { serial_splits_ = on; }
+  void set_serial_edits(bool on) { serial_edits_ = on; }
   /// Split rounds so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_rounds() const { return large_rounds_; }
   /// Restore waves so far large enough to run as a parallel loop (tests check they happened).
@@ -174,7 +174,7 @@ class FastSimulator final : public Simulator {
   std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
-  bool serial_splits_ = false;            ///< see set_serial_splits
+  bool serial_edits_ = false;             ///< see set_serial_edits
   std::uint64_t large_rounds_ = 0;        ///< see large_rounds
   std::uint64_t large_waves_ = 0;         ///< see large_waves
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)

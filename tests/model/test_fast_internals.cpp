@@ -133,7 +133,7 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
     auto run = [&](bool serial, std::vector<StepEvents>& events) {  // one simulator at a time
       // 48 x 48: some rounds of over 64 splits, which run as parallel loops (smaller ones inline).
       fast::FastSimulator sim(make_grid(48), p, threads);
-      sim.set_serial_splits(serial);
+      sim.set_serial_edits(serial);
       for (int f = 0; f < 110; ++f) events.push_back(sim.step());
       EXPECT_EQ(sim.check_topology(), "");
       if (!serial) large_rounds = sim.large_rounds(), large_waves = sim.large_waves();
