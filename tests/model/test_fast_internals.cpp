@@ -1,14 +1,71 @@
 // The fast backend's internal machinery, which must not change what is simulated: the slot
 // layout (core/fast/layout.h) changes only where things are stored; the parallel rounds of
-// splits (fast_adapt.cpp) give what one split after the other gives.
+// splits and waves of restores (fast_adapt.cpp) give what one event after the other gives; the
+// wide rows (wide.h) add lane by lane as scalars do; the arrays keep their room when copied.
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "fast/fast_sim.h"
 #include "fast/layout.h"
+#include "fast/wide.h"
 #include "support/fixtures.h"
 
 namespace crumple::test {
 namespace {
+
+// A row sum is the per-lane scalar sum, bit for bit: the gather's exactness rests on it.
+TEST(Wide, RowArithmeticIsPerLaneScalarArithmetic) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1e3f, 1e3f);
+  float a[16], b[16], c[16];
+  for (int round = 0; round < 100; ++round) {
+    for (int k = 0; k < 16; ++k) a[k] = u(rng), b[k] = u(rng), c[k] = u(rng);
+    fast::Wide<16> sum = fast::Wide<16>::load(a);
+    sum += fast::Wide<16>::load(b) * fast::Wide<16>::load(c);
+    const fast::Wide<16> scaled = 0.5f * fast::Wide<16>::load(b);
+    for (int k = 0; k < 16; ++k) {
+      volatile float product = b[k] * c[k];  // rounded on its own, as the row's product is
+      const float want = a[k] + product;
+      // The row's multiply-add may be contracted to one fused rounding: accept either result.
+      const float fused = std::fma(b[k], c[k], a[k]);
+      EXPECT_TRUE(sum[k] == want || sum[k] == fused) << "lane " << k;
+      EXPECT_EQ(scaled[k], 0.5f * b[k]) << "lane " << k;
+    }
+  }
+  // Scaling by 1, -1 and 0 (the gather's role rows) is exact, and adding +0 keeps a sum.
+  const fast::Wide<4> x{{3.25f, -7.5f, 1e-30f, 0.0f}}, signs{{1, -1, 0, 1}};
+  const fast::Wide<4> y = x * signs;
+  EXPECT_EQ(y[0], 3.25f);
+  EXPECT_EQ(y[1], 7.5f);
+  EXPECT_EQ(y[2], 0.0f);
+  fast::Wide<4> acc = fast::Wide<4>::zero();
+  acc += y;
+  acc += fast::Wide<4>::zero() * x;
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(acc[k], y[k]);
+}
+
+// A copy keeps the reserved room (a clone grows without reallocating, as the original does),
+// and faulting the room in changes neither the size nor the elements.
+TEST(Array, CopyKeepsRoomAndWarmingKeepsElements) {
+  fast::Array<int> a;
+  a.reserve_warm(1000);
+  for (int k = 0; k < 10; ++k) a.push_back(k * k);
+  const fast::Array<int> b(a);
+  EXPECT_GE(b.capacity(), 1000u);
+  ASSERT_EQ(b.size(), 10u);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(b[k], k * k);
+  fast::Array<int> c;
+  c = a;
+  EXPECT_GE(c.capacity(), 1000u);
+  c.resize(500);  // past the warmed eighth: the next part is touched
+  c.keep_warm();
+  EXPECT_EQ(c.size(), 500u);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(c[k], k * k);
+  const int* before = c.data();
+  c.resize(1000);
+  EXPECT_EQ(c.data(), before);  // grew into its room, no reallocation
+}
 
 bool same_snapshot(const Snapshot& a, const Snapshot& b) {
   if (!(a.position == b.position && a.velocity == b.velocity && a.mass == b.mass && a.rest == b.rest &&
