@@ -53,6 +53,16 @@ constexpr int kFixed = 8;
 alignas(64) const EdgeOut kZeroRow{};
 const Float4 kZero4{};
 using Row4 = Wide<4>;
+
+// The 64-byte records the gather reads are scattered, and a vertex's loads are few, so the
+// gather fetches the first kFixed records of the vertex kAhead places on while it sums this one
+// (entries past a list's count fetch the zero record). Gather 7.2 -> 4.5 ms at N = 256, 1 thread
+// (medians of 3, one prepared state); the same for the 16-byte records of the Jacobi sweep and
+// the normals measured slower (1.3 -> 1.7, 0.86 -> 1.44 ms): those mostly hit the cache.
+constexpr int kAhead = 6;
+void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, int shift) {
+  for (int k = 0; k < kFixed; ++k) __builtin_prefetch(k < count ? &records[list[k] >> shift] : &kZeroRow);
+}
 }  // namespace
 
 void vertex_normals(Topology& m, int begin, int end) {
@@ -140,6 +150,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   const int se = V.stride_e, st = V.stride_t;
   const EdgeOut* __restrict out = m.E.out.data();
   for (int v = begin; v < end; ++v) {
+    if (v + kAhead < end) {
+      const std::size_t a = std::size_t(v + kAhead);
+      prefetch_list(out, &V.springs[a * se], V.n_springs[a], 1);
+      prefetch_list(out, &V.wings[a * st], V.n_tris[a], 0);
+    }
     Row sum = Row::zero();
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
     const int ns = V.n_springs[v], nt = V.n_tris[v];
