@@ -173,35 +173,34 @@ int FastSimulator::apply_splits() {
     }
     return done;
   }
-  const std::vector<int>& round_splits = s.splits;
   std::vector<SplitPlan>& plans = s.plans;
   std::vector<int>& round_of = s.round_of;
   plans.clear(), round_of.clear();
   // Per-vertex scratch, all 0 between passes (reset below for the vertices used): no pass
   // clears or allocates an array the size of the mesh.
   for (std::vector<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(nv0), 0);
-  split_vertex_.resize(std::size_t(nv0), 0);
   std::vector<int>& involved = s.involved;  // vertices of accepted splits (i, j, l, r), once each
+  std::vector<SplitCandidate>& candidates = s.split_candidates;
   involved.clear();
   int rounds = 0, need_springs = 0, need_tris = 0;
   // What the serial pre-pass needs of each candidate, read in parallel into a compact array
   // (the pre-pass then touches only it, the stamps and the rounds).
-  split_candidates_.resize(round_splits.size());
-  par_.run(int(round_splits.size()), 256, [&](int b, int e) {
+  candidates.resize(s.splits.size());
+  par_.run(int(s.splits.size()), 256, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
-      if (k + kFar < e) prefetch_edge(m, round_splits[k + kFar]);
-      split_candidates_[k] = split_candidate(round_splits[k]);
+      if (k + kFar < e) prefetch_edge(m, s.splits[k + kFar]);
+      candidates[k] = split_candidate(s.splits[k]);
     }
   });
-  for (std::size_t k = 0; k < round_splits.size(); ++k) {
-    if (k + kNear < round_splits.size()) {
-      const SplitCandidate& f = split_candidates_[k + kNear];
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    if (k + kNear < candidates.size()) {
+      const SplitCandidate& f = candidates[k + kNear];
       for (int t : f.tris)
         if (t >= 0 && t < int(tri_stamp_.size())) prefetch(&tri_stamp_[t]);
       for (int v : f.ends)
-        if (v >= 0) prefetch(&round_last_[v]), prefetch(&split_vertex_[v]);
+        if (v >= 0) prefetch(&round_last_[v]);
     }
-    const SplitCandidate& c = split_candidates_[k];
+    const SplitCandidate& c = candidates[k];
     const int tL = c.tris[0], tR = c.tris[1];
     if (touched(tL) || touched(tR)) continue;
     const SplitPlan p = plan_split(c);
@@ -213,8 +212,8 @@ int FastSimulator::apply_splits() {
     ++round;
     for (int v : ends) {
       if (v < 0) continue;
+      if (round_last_[v] == 0) involved.push_back(v);  // its first split of the pass
       round_last_[v] = round;
-      if (!split_vertex_[v]) split_vertex_[v] = 1, involved.push_back(v);
     }
     rounds = std::max(rounds, round);
     for (int t : {tL, tR, p.tris[0], p.tris[1]}) stamp(t);
@@ -258,7 +257,6 @@ int FastSimulator::apply_splits() {
       }
     });
   }
-  for (int v : involved) split_vertex_[v] = 0;
   return int(std::count(applied.begin(), applied.end(), std::uint8_t(1)));
 }
 
@@ -291,7 +289,8 @@ int FastSimulator::apply_restores() {
   const std::vector<int>& wave_restores = s.restores;
   const int nr = int(wave_restores.size());
   enum : std::uint8_t { kNever, kNotNow, kRestorable };  // a candidate's answer on the state after the splits
-  candidates_.resize(std::size_t(nr));
+  std::vector<RestoreCandidate>& candidates = s.restore_candidates;
+  candidates.resize(std::size_t(nr));
   par_.run(nr, 128, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E.record[wave_restores[k + kNear]]]);
@@ -302,27 +301,27 @@ int FastSimulator::apply_restores() {
       const std::uint8_t answer = std::any_of(r.t.begin(), r.t.end(), is_touched) ? kNever
                                   : can_restore(edge)                           ? kRestorable
                                                                                 : kNotNow;
-      candidates_[k] = RestoreCandidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
+      candidates[k] = RestoreCandidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
     }
   });
   claim_.resize(std::size_t(m.V.size()), 0);  // all 0 between waves
   std::vector<int>&pending = s.pending, &next = s.next, &wave = s.wave, &claimed = s.claimed;
   pending.clear();
   for (int k = 0; k < nr; ++k)
-    if (candidates_[k].answer != kNever) pending.push_back(k);
+    if (candidates[k].answer != kNever) pending.push_back(k);
   std::vector<std::pair<int, Freed>>& freed = s.freed;  // (candidate, what its restore freed)
   freed.clear();
   for (bool first = true; !pending.empty(); first = false) {
     next.clear(), wave.clear(), claimed.clear();
     for (std::size_t q = 0; q < pending.size(); ++q) {
       if (q + kFar < pending.size())
-        for (int v : candidates_[pending[q + kFar]].verts)
+        for (int v : candidates[pending[q + kFar]].verts)
           if (v >= 0) prefetch(&claim_[v]);
       const int k = pending[q], e = wave_restores[k];
-      const std::array<int, 5>& verts = candidates_[k].verts;
+      const std::array<int, 5>& verts = candidates[k].verts;
       const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
       if (!waits) {
-        if (first && candidates_[k].answer != kRestorable) continue;
+        if (first && candidates[k].answer != kRestorable) continue;
         if (!first) {
           const SplitRecord& r = m.records[m.E.record[e]];
           if (std::any_of(r.t.begin(), r.t.end(), is_touched) || !can_restore(e)) continue;

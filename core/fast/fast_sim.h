@@ -148,21 +148,21 @@ class FastSimulator final : public Simulator {
   std::vector<std::uint8_t> by_id_;       ///< the nonzero decisions per logical id (0 between passes)
   std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
   std::vector<std::uint64_t> vertex_stamp_;  ///< pass that last renewed each vertex normal
-  std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass
+  std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass (0: none)
   std::vector<int> spring_adds_;          ///< per vertex: springs the splits of this pass add
   std::vector<int> tri_adds_;             ///< per vertex: triangles the splits of this pass add
-  std::vector<std::uint8_t> split_vertex_;  ///< per vertex: 1 while a split of the pass involves it
   std::vector<int> claim_;                ///< per vertex: 1 + the restore candidate claiming it in a wave
   struct RestoreCandidate {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
     std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)
   };
-  std::vector<SplitCandidate> split_candidates_;  ///< this pass's split candidates, in event order
   /// adapt_apply's temporaries, kept from pass to pass so that a pass allocates (and faults
   /// in) no memory: fast_adapt.cpp says what each holds.
   struct AdaptScratch {
     std::vector<std::vector<int>> found;            ///< event slots per block of ids and kind
     std::vector<int> splits, restores;              ///< event slots in event order
+    std::vector<SplitCandidate> split_candidates;   ///< per split event
+    std::vector<RestoreCandidate> restore_candidates;  ///< per restore event
     std::vector<int> changed;                       ///< triangles changed in the pass
     std::vector<SplitPlan> plans;                   ///< accepted splits
     std::vector<int> round_of, involved, by_round, start, fill;  ///< split rounds
@@ -171,7 +171,6 @@ class FastSimulator final : public Simulator {
     std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
   };
   AdaptScratch scratch_;
-  std::vector<RestoreCandidate> candidates_;  ///< this pass's restore candidates, in event order
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_edits_ = false;             ///< see set_serial_edits

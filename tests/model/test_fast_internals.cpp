@@ -80,6 +80,16 @@ bool same_snapshot(const Snapshot& a, const Snapshot& b) {
   return true;
 }
 
+/// Asserts two runs had the same events frame by frame, and totals them.
+void same_events(const std::vector<StepEvents>& a, const std::vector<StepEvents>& b, long& splits, long& restores) {
+  for (std::size_t f = 0; f < a.size(); ++f) {
+    ASSERT_EQ(a[f].splits, b[f].splits) << "frame " << f;
+    ASSERT_EQ(a[f].restores, b[f].restores) << "frame " << f;
+    splits += a[f].splits;
+    restores += a[f].restores;
+  }
+}
+
 /// Mean |slot(a) - slot(b)| over live edges: how far apart neighbours are stored.
 double mean_slot_distance(const fast::Topology& m) {
   double sum = 0;
@@ -117,12 +127,7 @@ TEST(Layout, RelayoutEveryStepChangesNoBit) {
     int moved = 0, unmoved = 0;
     const Snapshot every = run(0, ea, moved), never = run(-1, eb, unmoved);
     long splits = 0, restores = 0;
-    for (std::size_t f = 0; f < ea.size(); ++f) {
-      ASSERT_EQ(ea[f].splits, eb[f].splits) << "frame " << f;
-      ASSERT_EQ(ea[f].restores, eb[f].restores) << "frame " << f;
-      splits += ea[f].splits;
-      restores += ea[f].restores;
-    }
+    ASSERT_NO_FATAL_FAILURE(same_events(ea, eb, splits, restores));
     EXPECT_GT(splits, 300);
     EXPECT_GT(restores, 30);
     EXPECT_TRUE(same_snapshot(every, never)) << threads << " threads";
@@ -199,12 +204,7 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
     std::vector<StepEvents> ea, eb;
     const Snapshot rounds = run(false, ea), serial = run(true, eb);
     long splits = 0, restores = 0;
-    for (std::size_t f = 0; f < ea.size(); ++f) {
-      ASSERT_EQ(ea[f].splits, eb[f].splits) << "frame " << f;
-      ASSERT_EQ(ea[f].restores, eb[f].restores) << "frame " << f;
-      splits += ea[f].splits;
-      restores += ea[f].restores;
-    }
+    ASSERT_NO_FATAL_FAILURE(same_events(ea, eb, splits, restores));
     EXPECT_GT(splits, 2000);
     EXPECT_GT(restores, 500);
     EXPECT_GT(large_rounds, 10u);  // the parallel paths did run
