@@ -79,7 +79,7 @@ void FastSimulator::adapt_decide() {
   c.fracture = params_.fracture;
   c.restoration = params_.restoration;
   decisions_.resize(std::size_t(topo_.E.size()));
-  par_.run(topo_.E.size(), 4096, [&](int b, int e) { adapt_test(topo_, c, decisions_.data(), b, e); });
+  par_.run_lanes(topo_.E.size(), 4096, [&](int b, int e) { adapt_test(topo_, c, decisions_.data(), b, e); });
 }
 
 StepEvents FastSimulator::adapt_apply() {

@@ -95,7 +95,7 @@ void FastSimulator::integrate() {
     for (int k : scene_.pinned) topo_.V.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
   };
   if (params_.integrator == Integrator::Explicit) {
-    par_.run(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
+    par_.run_lanes(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
     pin();
   } else {
     pin();
@@ -113,7 +113,7 @@ void FastSimulator::integrate() {
   }
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
-  par_.run(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
+  par_.run_lanes(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
   for (int k : scene_.pinned) {  // input vertex k has logical id k
     const int v = topo_.V.phys[k];
     topo_.V.x[v] = float(scene_.position[k][0]), topo_.V.y[v] = float(scene_.position[k][1]);

@@ -240,21 +240,23 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
                   float* __restrict vy, float* __restrict vz, const Float4* __restrict g,
                   const float* __restrict mass, int begin, int end) {
   const bool sphere = radius > 0;
+  // The constants as locals: read through pointers inside the loop they stop it from vectorizing.
+  const float h = c.h, c0 = corr[0], c1 = corr[1], c2 = corr[2], s0 = center[0], s1 = center[1], s2 = center[2];
   CRUMPLE_SIMD_LOOP
   for (int v = begin; v < end; ++v) {
     const float on = mass[v] > 0 ? 1.0f : 0.0f;
-    float ux = on * (g[v].x - corr[0]), uy = on * (g[v].y - corr[1]), uz = on * (g[v].z - corr[2]);
-    float px = x[v] + c.h * ux, py = y[v] + c.h * uy, pz = z[v] + c.h * uz;
+    float ux = on * (g[v].x - c0), uy = on * (g[v].y - c1), uz = on * (g[v].z - c2);
+    float px = x[v] + h * ux, py = y[v] + h * uy, pz = z[v] + h * uz;
     if (sphere) {
       // The manipulation sphere (§8): onto the sphere, outward velocity removed.
-      const float dx = px - center[0], dy = py - center[1], dz = pz - center[2];
+      const float dx = px - s0, dy = py - s1, dz = pz - s2;
       const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
       const bool out = r > radius;
       const float inv = r > 0 ? 1.0f / r : 0.0f;
       const float nx = dx * inv, ny = dy * inv, nz = dz * inv;
-      px = out ? center[0] + radius * nx : px;
-      py = out ? center[1] + radius * ny : py;
-      pz = out ? center[2] + radius * nz : pz;
+      px = out ? s0 + radius * nx : px;
+      py = out ? s1 + radius * ny : py;
+      pz = out ? s2 + radius * nz : pz;
       const float radial = ux * nx + uy * ny + uz * nz;
       const float cut = (out && radial > 0) ? radial : 0.0f;
       ux -= cut * nx;
@@ -293,6 +295,9 @@ void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const
                 const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
                 std::uint8_t* __restrict out, int begin, int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
+  // The constants as locals: read through c inside the loop they stop it from vectorizing.
+  const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent;
+  const bool fracture = c.fracture, restoration = c.restoration;
   CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
     const int a = A[e], b = B[e];
@@ -302,18 +307,21 @@ void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
     const float comp = 1.0f - lt / l0[e];
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
-    const float nrl = two_wings ? nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l] : 1.0f;
-    float P = 0.25f * comp * (1 - c.phi * nij) * (1 + c.phi * nrl);
-    P = std::fmin(std::fmax(P, 0.0f), 1.0f);
-    const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - P, c.step_exponent);
+    const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // loaded unconditionally:
+    const float nrl = two_wings ? dot_rl : 1.0f;  // a conditional load is control flow to GCC
+    const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
+    // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
+    // [0, 1), decides the same for P and its clamp (NaN too), and any clamp (fmin/fmax calls, or
+    // selects, which GCC 12 turns into branches) keeps this loop from vectorizing.
+    const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - std::fmin(std::fmax(P, 0.0f), 1.0f), exponent);
     // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = c.fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= c.floor_length) & (lt < l0[e]);
+    const bool can = fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= floor_length) & (lt < l0[e]);
     const bool breaks = can & (Pstep > 0) & (u < Pstep);
-    const bool restores = c.restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= c.epsilon);
-    out[e] = breaks ? 1 : (restores ? 2 : 0);
+    const bool restores = restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
+    out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0 (no selects: see P)
   }
 }
 }  // namespace

@@ -8,6 +8,7 @@
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <algorithm>
 #include <memory>
 #include <vector>
 
@@ -60,6 +61,17 @@ class Parallel {
       });
     });
     CRUMPLE_TSAN_ACQUIRE(&after);
+  }
+
+  /// run() for a vectorized kernel: every chunk starts at a multiple of kLanes items, so each
+  /// item is computed in the same vector lane of the same code path (vector body, vector
+  /// epilogue or scalar tail) on any thread count. The compiler may contract a*b+c into an FMA
+  /// differently in those paths; aligned chunks make per-item results independent of that.
+  static constexpr int kLanes = 64;
+  template <class Kernel>
+  void run_lanes(int n, int grain, const Kernel& kernel) const {
+    const int blocks = (n + kLanes - 1) / kLanes;
+    run(blocks, std::max(1, grain / kLanes), [&](int b0, int b1) { kernel(b0 * kLanes, std::min(n, b1 * kLanes)); });
   }
 
   /// Sums partial(begin, end, out[3]) over fixed blocks of `block` items, in block order.

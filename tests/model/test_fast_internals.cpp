@@ -1,13 +1,16 @@
 // The fast backend's internal machinery, which must not change what is simulated: the slot
 // layout (core/fast/layout.h) changes only where things are stored; the parallel rounds of
 // splits and waves of restores (fast_adapt.cpp) give what one event after the other gives; the
-// wide rows (wide.h) add lane by lane as scalars do; the arrays keep their room when copied.
+// wide rows (wide.h) add lane by lane as scalars do; the arrays keep their room when copied;
+// vectorized kernels run in chunks aligned to lanes (parallel.h).
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <random>
 
 #include "fast/fast_sim.h"
 #include "fast/layout.h"
+#include "fast/parallel.h"
 #include "fast/wide.h"
 #include "support/fixtures.h"
 
@@ -65,6 +68,26 @@ TEST(Array, CopyKeepsRoomAndWarmingKeepsElements) {
   const int* before = c.data();
   c.resize(1000);
   EXPECT_EQ(c.data(), before);  // grew into its room, no reallocation
+}
+
+// A vectorized kernel's chunks start on lane boundaries, on any thread count, and cover the
+// range once: so each item is computed by the same code path however the range is split.
+TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
+  for (int threads : {1, 2, 4}) {
+    const fast::Parallel par(threads);
+    for (int n : {0, 1, 63, 64, 65, 4097, 100003}) {
+      std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n));
+      std::atomic<int> misaligned{0};
+      par.run_lanes(n, 256, [&](int b, int e) {
+        if (b % fast::Parallel::kLanes != 0 || e < b || e > n) ++misaligned;
+        for (int k = b; k < e; ++k) ++seen[std::size_t(k)];
+      });
+      EXPECT_EQ(misaligned.load(), 0) << "threads " << threads << ", n " << n;
+      int once = 0;
+      for (auto& s : seen) once += s.load() == 1;
+      EXPECT_EQ(once, n) << "threads " << threads << ", n " << n;
+    }
+  }
 }
 
 bool same_snapshot(const Snapshot& a, const Snapshot& b) {

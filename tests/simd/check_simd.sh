@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Shows that the fast kernels vectorize (and that the no-SIMD build really is scalar), from the
+# machine code the build made: each kernel named below must contain packed single-precision
+# arithmetic (vaddps, vfmadd231ps, ...) in the SIMD build and none in the no-SIMD build.
+# Usage: check_simd.sh <libcrumple_fast.a> simd|scalar
+# A kernel that silently stops vectorizing (a clamp the compiler turns into a branch, a
+# constant read through a pointer in the loop) fails here with its name.
+set -euo pipefail
+lib=$1 mode=$2
+# Vectorized loops (omp simd) and wide-row sums (wide.h); the edge and triangle passes are
+# scalar on purpose (kernels.cpp says why) and not listed.
+kernels=(adapt_test advance gather_forces jacobi_sweep vertex_normals)
+dump=$(objdump -d -C --no-show-raw-insn "$lib")
+status=0
+for k in "${kernels[@]}"; do
+  # The body of crumple::fast::<k>(...) and of a <k>_body(...) helper it calls.
+  body=$(awk -v a="crumple::fast::$k(" -v b="::${k}_body(" \
+    '/>:$/ {p = index($0, a) || index($0, b); next} /^$/ {p = 0} p' <<<"$dump")
+  if [[ -z $body ]]; then echo "check_simd: no function $k in $lib"; status=1; continue; fi
+  packed=$(grep -cE $'\tv?(add|sub|mul|div|sqrt|max|min|f(n)?m(add|sub)[0-9]+)ps ' <<<"$body" || true)
+  echo "$k: $packed packed float instructions"
+  if [[ $mode == simd && $packed -eq 0 ]]; then echo "check_simd: $k is not vectorized"; status=1; fi
+  if [[ $mode == scalar && $packed -ne 0 ]]; then echo "check_simd: $k is vectorized in the no-SIMD build"; status=1; fi
+done
+exit $status
