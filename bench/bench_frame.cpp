@@ -159,6 +159,38 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   state.counters["mismatch"] = double(mismatch);
 }
 
+// BM_Frozen/<backend>/<threads>/<N>: the frames of BM_Frame from the same prepared state with
+// fracture and restoration switched off (Simulator::set_adaptivity) before the warm-up frame:
+// the physics of those frames alone, with the topology frozen. BM_Frame minus BM_Frozen is what
+// the events cost (fracture and restoration tests, splits, restores, relayouts), which
+// scripts/bench_report.py divides by the events per frame. (A frozen step computes the normals
+// at its start, where an adaptive step has them from its fracture test: that pass is in both.)
+void BM_Frozen(benchmark::State& state, const std::string& backend, int threads, int n) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  Prepared& p = prepared(backend, threads, n);
+  if (!p.error.empty()) {
+    state.SkipWithError(p.error.c_str());
+    return;
+  }
+  const int k = frames_per_iteration(n);
+  FrameTally tally;
+  long events = 0;
+  for (auto _ : state) {
+    std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
+    sim->set_adaptivity(false, false);
+    for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
+    const Clock::time_point t0 = Clock::now();
+    for (int f = 0; f < k; ++f)
+      for (int s = 0; s < p.substeps; ++s) {
+        const StepEvents ev = sim->step();
+        events += ev.splits + ev.restores;
+      }
+    tally.add_batch(state, seconds_between(t0, Clock::now()), k);
+  }
+  tally.set_counters(state, p.vertices, p.edges);
+  state.counters["events"] = double(events);  // 0 expected: the topology is frozen
+}
+
 void register_frame_benchmarks() {
   for (const std::string& backend : backend_names()) {
     const bool reference = backend == "reference";
@@ -174,6 +206,17 @@ void register_frame_benchmarks() {
       }
     }
   }
+  for (const std::string& backend : backend_names())
+    for (int threads : {1, 2}) {
+      if (backend == "reference" && threads != 1) continue;
+      for (int n : {128, 256, 512}) {
+        const std::string name =
+            "BM_Frozen/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frozen, backend, threads, n)
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
+      }
+    }
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }
 

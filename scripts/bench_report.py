@@ -28,6 +28,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
@@ -106,11 +107,12 @@ def order_configs(keys):
     return sorted(keys, key=rank)
 
 
-def frame_series(benches):
-    """{(backend, threads): {n: Bench}} for the BM_Frame benchmarks that produced times."""
+def frame_series(benches, pattern=FRAME):
+    """{(backend, threads): {n: Bench}} for the BM_Frame (or other pattern's) benchmarks that
+    produced times."""
     series = {}
     for name, b in benches.items():
-        m = FRAME.match(name)
+        m = pattern.match(name)
         if m and b.times:
             series.setdefault(config_key(m["backend"], m["threads"]), {})[int(m["n"])] = b
     return series
@@ -261,6 +263,42 @@ def largest_within(series_for_config, budget_ms):
     return max(fits, key=lambda nb: nb[0])
 
 
+def event_cost_rows(series, frozen):
+    """(key, n, frame ms, frozen ms, events per frame) where both were measured."""
+    rows = []
+    for key in order_configs(frozen):
+        for n, fz in sorted(frozen[key].items()):
+            fr = series.get(key, {}).get(n)
+            if fr is None:
+                continue
+            events = fr.counter("splits") + fr.counter("restores")
+            rows.append((key, n, fr.median(), fz.median(), events, fz.counter("events") > 0))
+    return rows
+
+
+def event_cost_section(series, frozen):
+    rows = event_cost_rows(series, frozen)
+    if not rows:
+        return []
+    lines = ["## What the events cost", "",
+             "`BM_Frozen/<backend>/<threads>/<N>` times the frames of `BM_Frame` from the same prepared state with "
+             "fracture and restoration switched off: the physics alone on a frozen topology. The difference is what "
+             "the events cost per frame (fracture and restoration tests, splits, restores and, in the fast backend, "
+             "the relayouts they trigger), and per event once divided by the splits + restores of a frame. Medians of "
+             "each; the difference of two noisy medians is itself noisy.", "",
+             "| configuration | N | frame ms | frozen ms | events share | events/frame | us per event |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    for key, n, frame, frz, events, thawed in rows:
+        cost = frame - frz
+        per = f"{1000.0 * cost / events:.2f}" if events > 0 else "-"
+        if thawed:  # the frozen run had events: set_adaptivity did not hold, the row means nothing
+            per += " (**the frozen run had events**)"
+        lines.append(f"| {key[0]} {key[1]}t | {n} | {fmt_ms(frame)} | {fmt_ms(frz)} | {100.0 * cost / frame:.0f} % | "
+                     f"{events:,.0f} | {per} |")
+    lines.append("")
+    return lines
+
+
 def report(json_path, run, context, benches, out_dir, charts):
     series = frame_series(benches)
     m = run.get("machine", {})
@@ -369,6 +407,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     else:
         lines.append("Only one crumple configuration was measured; no speed-up to show.")
     lines.append("")
+    lines += event_cost_section(series, frame_series(benches, FROZEN))
     if "passes.png" in charts:
         lines.append("## Time per pass")
         lines.append("")

@@ -61,6 +61,10 @@ class FastSimulator final : public Simulator {
   const char* name() const override { return "fast"; }
   std::unique_ptr<Simulator> clone() const override { return std::make_unique<FastSimulator>(*this); }
   StepEvents step() override;
+  void set_adaptivity(bool fracture, bool restoration) override {
+    params_.fracture = fracture;
+    params_.restoration = restoration;
+  }
   double time() const override { return time_; }
   std::uint64_t steps() const override { return steps_; }
   Totals totals() const override;

@@ -24,6 +24,10 @@ class ReferenceSimulator final : public Simulator {
   const char* name() const override { return "reference"; }
   std::unique_ptr<Simulator> clone() const override { return std::make_unique<ReferenceSimulator>(*this); }
   StepEvents step() override;
+  void set_adaptivity(bool fracture, bool restoration) override {
+    params_.fracture = fracture;
+    params_.restoration = restoration;
+  }
   double time() const override { return time_; }
   std::uint64_t steps() const override { return steps_; }
   Totals totals() const override;

@@ -91,6 +91,11 @@ class Simulator {
   /// Advances one time step h = params.h(): forces, integration, sphere, fracture, restoration.
   virtual StepEvents step() = 0;
 
+  /// Turns fracture [Eq 6] and restoration [Eq 10] on or off from the next step on. Off, the
+  /// topology is frozen and a step is the physics alone: the benchmarks time the same prepared
+  /// frames both ways to price the events (BM_Frozen in bench/bench_frame.cpp).
+  virtual void set_adaptivity(bool fracture, bool restoration) = 0;
+
   /// Simulated time and number of steps taken.
   virtual double time() const = 0;
   virtual std::uint64_t steps() const = 0;
