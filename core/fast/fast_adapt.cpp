@@ -362,11 +362,24 @@ void FastSimulator::renew_normals() {
   // and in which order changes nothing).
   const std::vector<int>& changed = scratch_.changed;
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
+  // Both loops prefetch what the changed triangle kNear on reads: its corners' positions, then
+  // its corners' triangle lists (the triangle lines themselves, kFar on): renewal 2.4-2.6 ->
+  // 1.9-2.1 ms at N = 256, 1 thread (3 interleaved pairs). Prefetching the areas those lists
+  // name, one triangle on, measured slower (2.3-2.9 ms).
+  const Vertices& V = topo_.V;
+  const Triangles& T = topo_.T;
   par_.run(int(changed.size()), 512, [&](int b, int e) {
-    for (int k = b; k < e; ++k) triangle_areas(topo_, changed[k], changed[k] + 1);
+    for (int k = b; k < e; ++k) {
+      if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
+      if (k + kNear < e)
+        for (int v : T.corners(changed[k + kNear])) prefetch(&V.x[v]), prefetch(&V.y[v]), prefetch(&V.z[v]);
+      triangle_areas(topo_, changed[k], changed[k] + 1);
+    }
   });
   par_.run(int(changed.size()), 512, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
+      if (k + kNear < e)
+        for (int v : T.corners(changed[k + kNear])) prefetch(&V.n_tris[v]), prefetch(topo_.tris_of(v));
       const int t = changed[k];
       if (!topo_.T.alive[t]) continue;
       for (int v : topo_.T.corners(t)) {
