@@ -23,8 +23,36 @@ std::uint64_t spread3(std::uint64_t v) {
   return v;
 }
 
+/// One stable counting pass over the items 0..n-1 with keys in [0, buckets): place(k, to) is
+/// told each item's rank among the items of smaller key, then of equal key and smaller index.
+/// The items are cut into one block per thread, each counted into its own histogram, the
+/// histograms summed in bucket-major order (serial, buckets x blocks), then each block places
+/// its items in index order: the ranks do not depend on the number of blocks, so the result is
+/// the serial pass's on any thread count.
+template <class Key, class Place>
+void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
+  const int blocks = std::clamp(n / kGrain, 1, par.threads());
+  const int per = (n + blocks - 1) / blocks;
+  hist.assign(std::size_t(blocks) * buckets, 0);
+  par.run(blocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      int* h = &hist[std::size_t(b) * buckets];
+      for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) ++h[key(k)];
+    }
+  });
+  int sum = 0;
+  for (int c = 0; c < buckets; ++c)
+    for (int b = 0; b < blocks; ++b) sum += std::exchange(hist[std::size_t(b) * buckets + c], sum);
+  par.run(blocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      int* h = &hist[std::size_t(b) * buckets];
+      for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) place(k, h[key(k)]++);
+    }
+  });
+}
+
 /// Stable LSD radix sort of the slots 0..n-1 by code (11-bit digits over `bits`) into `order`.
-void radix_order(LayoutScratch& s, int bits, std::vector<int>& order) {
+void radix_order(const Parallel& par, LayoutScratch& s, int bits, std::vector<int>& order) {
   const int n = int(s.code.size());
   order.resize(n);
   s.idx.resize(n);
@@ -33,34 +61,31 @@ void radix_order(LayoutScratch& s, int bits, std::vector<int>& order) {
   constexpr int kDigit = 11;
   constexpr std::uint64_t kMask = (std::uint64_t(1) << kDigit) - 1;
   for (int shift = 0; shift < bits; shift += kDigit) {
-    s.count.assign(std::size_t(1) << kDigit, 0);
-    for (int k = 0; k < n; ++k) ++s.count[(s.code[k] >> shift) & kMask];
-    int sum = 0;
-    for (int& c : s.count) sum += std::exchange(c, sum);
-    for (int k = 0; k < n; ++k) {
-      const int to = s.count[(s.code[k] >> shift) & kMask]++;
-      s.code2[to] = s.code[k];
+    const std::uint64_t* code = s.code.data();
+    auto digit = [&](int k) { return int((code[k] >> shift) & kMask); };
+    stable_pass(par, s.count, n, 1 << kDigit, digit, [&](int k, int to) {
+      s.code2[to] = code[k];
       s.idx[to] = order[k];
-    }
+    });
     s.code.swap(s.code2);
     order.swap(s.idx);
   }
 }
 
 /// Stable counting sort of the slots by s.key (values in [0, buckets)) into `order`.
-void counting_order(LayoutScratch& s, int buckets, std::vector<int>& order) {
-  const int n = int(s.key.size());
-  s.count.assign(std::size_t(buckets) + 1, 0);
-  order.resize(n);
-  for (int k : s.key) ++s.count[std::size_t(k) + 1];
-  for (int b = 0; b < buckets; ++b) s.count[b + 1] += s.count[b];
-  for (int k = 0; k < n; ++k) order[s.count[s.key[k]]++] = k;
+void counting_order(const Parallel& par, LayoutScratch& s, int buckets, std::vector<int>& order) {
+  order.resize(s.key.size());
+  const int* key = s.key.data();
+  stable_pass(par, s.count, int(s.key.size()), buckets, [&](int k) { return key[k]; },
+              [&](int k, int to) { order[to] = k; });
 }
 
 /// of[old] = new from order[new] = old.
-void inverse(const std::vector<int>& order, std::vector<int>& of) {
+void inverse(const Parallel& par, const std::vector<int>& order, std::vector<int>& of) {
   of.resize(order.size());
-  for (int k = 0; k < int(order.size()); ++k) of[order[k]] = k;
+  par.run(int(order.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) of[order[k]] = k;
+  });
 }
 
 /// The spare buffer of element type T.
@@ -99,7 +124,7 @@ void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vect
 }
 
 /// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
-void vertex_order(const Vertices& V, LayoutScratch& s) {
+void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int n = V.size();
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int v = 0; v < n; ++v) {
@@ -112,20 +137,22 @@ void vertex_order(const Vertices& V, LayoutScratch& s) {
   const double extent = std::max({double(hi[0]) - lo[0], double(hi[1]) - lo[1], double(hi[2]) - lo[2], 1e-30});
   const double scale = double((1 << bits) - 1) / extent;
   s.code.resize(n);
-  for (int v = 0; v < n; ++v) {
-    if (!(V.m[v] > 0)) {
-      s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
-      continue;
+  par.run(n, kGrain, [&](int b, int e) {
+    for (int v = b; v < e; ++v) {
+      if (!(V.m[v] > 0)) {
+        s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
+        continue;
+      }
+      const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
+      std::uint64_t code = 0;
+      for (int d = 0; d < 3; ++d) {
+        const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double((1 << bits) - 1));
+        code |= spread3(std::uint64_t(q)) << d;
+      }
+      s.code[v] = code;
     }
-    const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
-    std::uint64_t code = 0;
-    for (int d = 0; d < 3; ++d) {
-      const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double((1 << bits) - 1));
-      code |= spread3(std::uint64_t(q)) << d;
-    }
-    s.code[v] = code;
-  }
-  radix_order(s, 3 * bits + 1, s.vorder);
+  });
+  radix_order(par, s, 3 * bits + 1, s.vorder);
 }
 
 }  // namespace
@@ -165,18 +192,22 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   Triangles& T = m.T;
   const int nv = V.size(), ne = E.size(), nt = T.size();
 
-  vertex_order(V, s);
-  inverse(s.vorder, s.vnew);
+  vertex_order(par, V, s);
+  inverse(par, s.vorder, s.vnew);
   const std::vector<int>& vnew = s.vnew;
   s.key.resize(ne);
-  for (int e = 0; e < ne; ++e) s.key[e] = (E.flags[e] & kAlive) ? std::min(vnew[E.a[e]], vnew[E.b[e]]) : nv;
-  counting_order(s, nv + 1, s.eorder);
-  inverse(s.eorder, s.enew);
+  par.run(ne, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) s.key[k] = (E.flags[k] & kAlive) ? std::min(vnew[E.a[k]], vnew[E.b[k]]) : nv;
+  });
+  counting_order(par, s, nv + 1, s.eorder);
+  inverse(par, s.eorder, s.enew);
   s.key.resize(nt);
-  for (int t = 0; t < nt; ++t)
-    s.key[t] = T.alive[t] ? std::min({vnew[T.v0[t]], vnew[T.v1[t]], vnew[T.v2[t]]}) : nv;
-  counting_order(s, nv + 1, s.torder);
-  inverse(s.torder, s.tnew);
+  par.run(nt, kGrain, [&](int b, int e) {
+    for (int t = b; t < e; ++t)
+      s.key[t] = T.alive[t] ? std::min({vnew[T.v0[t]], vnew[T.v1[t]], vnew[T.v2[t]]}) : nv;
+  });
+  counting_order(par, s, nv + 1, s.torder);
+  inverse(par, s.torder, s.tnew);
   const std::vector<int>&vorder = s.vorder, &eorder = s.eorder, &torder = s.torder, &enew = s.enew, &tnew = s.tnew;
 
   auto vmap = [&](std::int32_t v) { return v >= 0 ? std::int32_t(vnew[v]) : v; };
@@ -229,15 +260,24 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   permute(par, s, T.alive, torder);  // last: read above
 
   // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
-  for (SplitRecord& r : m.records) {
-    r.n = vmap(r.n);
-    for (int q = 0; q < 4; ++q) r.k[q] = vmap(r.k[q]), r.e[q] = emap(r.e[q]), r.t[q] = tmap(r.t[q]);
-  }
+  par.run(int(m.records.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      SplitRecord& r = m.records[k];
+      r.n = vmap(r.n);
+      for (int q = 0; q < 4; ++q) r.k[q] = vmap(r.k[q]), r.e[q] = emap(r.e[q]), r.t[q] = tmap(r.t[q]);
+    }
+  });
 
-  // The inverse maps; free lists hold logical ids and do not change.
-  for (int k = 0; k < nv; ++k) V.phys[V.lid[k]] = k;
-  for (int k = 0; k < ne; ++k) E.phys[E.lid[k]] = k;
-  for (int k = 0; k < nt; ++k) T.phys[T.lid[k]] = k;
+  // The inverse maps (each entry written once: no race); free lists hold logical ids and do
+  // not change.
+  auto invert = [&](Array<std::int32_t>& phys, const Array<std::int32_t>& lid, int n) {
+    par.run(n, kGrain, [&](int b, int e) {
+      for (int k = b; k < e; ++k) phys[lid[k]] = k;
+    });
+  };
+  invert(V.phys, V.lid, nv);
+  invert(E.phys, E.lid, ne);
+  invert(T.phys, T.lid, nt);
   V.created = E.created = T.created = 0;
 }
 
