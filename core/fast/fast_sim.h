@@ -12,6 +12,9 @@
 //              edge pass, 5.5 -> 9.5 ms; streaming stores of the edge records, no gain;
 //              transparent huge pages for the large arrays, no gain on this VM, and 2 MiB-
 //              aligned arrays alias in the caches.)
+//              (Measured, and not kept: the bending sign from squared lengths, sign(|g|^2 -
+//              |o|^2), instead of two square roots: 5.3-5.5 against 5.4-7.3 ms at N = 256, no
+//              gain; the square roots are not what bounds the edge pass.)
 //              (Measured, and not kept: springs evaluated per vertex from its side, twice per
 //              spring, with a 16-byte bending output per edge: 1.2-1.6x slower than this at
 //              N = 128 and 256, the square roots costing more than the per-edge output.)

@@ -164,6 +164,30 @@ TEST(Layout, RelayoutEveryStepChangesNoBit) {
 // the same state, forces, normals and decisions, bit for bit; the next step agrees to float
 // round-off (only the momentum correction's summation order changed); neighbours are stored
 // much closer together than before.
+// The relayout's sorts run as per-thread blocks on two threads (layout.cpp's stable_pass): the
+// slot order they give must be the one thread's, element for element. 96 x 96, so that every
+// sort has over two blocks' worth of items.
+TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
+  Params p;
+  struct Order {
+    std::vector<std::int32_t> v, e, t;
+  };
+  auto relaid = [&](int threads) {  // one simulator alive at a time (see RelayoutEveryStep...)
+    fast::FastSimulator sim(make_grid(96), p, threads);
+    sim.set_layout_fraction(-1);
+    for (int f = 0; f < 40; ++f) sim.step();
+    sim.run_pass(fast::Pass::Layout);
+    EXPECT_EQ(sim.check_topology(), "");
+    const fast::Topology& m = sim.topology();
+    EXPECT_GT(m.V.size(), 2 * 4096);  // two blocks of the vertex sort (kGrain in layout.cpp)
+    return Order{{m.V.lid.begin(), m.V.lid.end()}, {m.E.lid.begin(), m.E.lid.end()}, {m.T.lid.begin(), m.T.lid.end()}};
+  };
+  const Order one = relaid(1), two = relaid(2);
+  EXPECT_EQ(one.v, two.v);
+  EXPECT_EQ(one.e, two.e);
+  EXPECT_EQ(one.t, two.t);
+}
+
 TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 1);
