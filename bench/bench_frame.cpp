@@ -127,7 +127,14 @@ Prepared& prepared(const std::string& backend, int threads, int n) {
   return it->second;
 }
 
-void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n) {
+// BM_Frame/<backend>/<threads>/<N> (frozen = false) and BM_Frozen/<backend>/<threads>/<N>
+// (frozen = true): the latter times the same frames from the same prepared state with fracture
+// and restoration switched off (Simulator::set_adaptivity) before the warm-up frame: the
+// physics of those frames alone, with the topology frozen. BM_Frame minus BM_Frozen is what the
+// events cost (fracture and restoration tests, splits, restores, relayouts), which
+// scripts/bench_report.py divides by the events per frame. (A frozen step computes the normals
+// at its start, where an adaptive step has them from its fracture test: that pass is in both.)
+void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, bool frozen) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   Prepared& p = prepared(backend, threads, n);
   if (!p.error.empty()) {
@@ -135,10 +142,12 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
     return;
   }
   const int k = frames_per_iteration(n);
+  const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
   long mismatch = 0;
   for (auto _ : state) {
     std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
+    if (frozen) sim->set_adaptivity(false, false);
     for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
     long splits = 0, restores = 0;
     const Clock::time_point t0 = Clock::now();
@@ -152,43 +161,11 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
     tally.add_batch(state, seconds_between(t0, t1), k);
     tally.splits += splits;
     tally.restores += restores;
-    mismatch += (splits != p.splits || restores != p.restores);
+    mismatch += (splits != want_splits || restores != want_restores);
     // sim is destroyed here, outside the timed interval
   }
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);
-}
-
-// BM_Frozen/<backend>/<threads>/<N>: the frames of BM_Frame from the same prepared state with
-// fracture and restoration switched off (Simulator::set_adaptivity) before the warm-up frame:
-// the physics of those frames alone, with the topology frozen. BM_Frame minus BM_Frozen is what
-// the events cost (fracture and restoration tests, splits, restores, relayouts), which
-// scripts/bench_report.py divides by the events per frame. (A frozen step computes the normals
-// at its start, where an adaptive step has them from its fracture test: that pass is in both.)
-void BM_Frozen(benchmark::State& state, const std::string& backend, int threads, int n) {
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Prepared& p = prepared(backend, threads, n);
-  if (!p.error.empty()) {
-    state.SkipWithError(p.error.c_str());
-    return;
-  }
-  const int k = frames_per_iteration(n);
-  FrameTally tally;
-  long events = 0;
-  for (auto _ : state) {
-    std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
-    sim->set_adaptivity(false, false);
-    for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
-    const Clock::time_point t0 = Clock::now();
-    for (int f = 0; f < k; ++f)
-      for (int s = 0; s < p.substeps; ++s) {
-        const StepEvents ev = sim->step();
-        events += ev.splits + ev.restores;
-      }
-    tally.add_batch(state, seconds_between(t0, Clock::now()), k);
-  }
-  tally.set_counters(state, p.vertices, p.edges);
-  state.counters["events"] = double(events);  // 0 expected: the topology is frozen
 }
 
 void register_frame_benchmarks() {
@@ -200,7 +177,7 @@ void register_frame_benchmarks() {
         if (reference && n > kReferenceMaxN) continue;
         const std::string name =
             "BM_Frame/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n)
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, false)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
       }
@@ -212,7 +189,7 @@ void register_frame_benchmarks() {
       for (int n : {128, 256, 512}) {
         const std::string name =
             "BM_Frozen/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frozen, backend, threads, n)
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, true)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
       }

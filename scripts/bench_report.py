@@ -272,7 +272,7 @@ def event_cost_rows(series, frozen):
             if fr is None:
                 continue
             events = fr.counter("splits") + fr.counter("restores")
-            rows.append((key, n, fr.median(), fz.median(), events, fz.counter("events") > 0))
+            rows.append((key, n, fr.median(), fz.median(), events, fz.counter("mismatch") > 0))
     return rows
 
 

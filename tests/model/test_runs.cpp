@@ -12,16 +12,22 @@ namespace {
 
 class Runs : public EachBackend {};
 
-// Free relax (no external force), balanced bending, exact restore: total mass and linear
-// momentum stay what they were, to round-off, through over a thousand splits and restores,
-// and the mesh is valid after every step.
-TEST_P(Runs, MassAndMomentumConservedThroughSplitsAndRestores) {
+/// A free sheet, squeezed and easy to break and restore: splits and restores every step.
+Params churn_params() {
   Params p;
   p.scene = Scene::Free;
   p.squeeze = 0.6;
   p.phi = 0.2;
   p.epsilon = 0.15;
   p.floor = 0.05;
+  return p;
+}
+
+// Free relax (no external force), balanced bending, exact restore: total mass and linear
+// momentum stay what they were, to round-off, through over a thousand splits and restores,
+// and the mesh is valid after every step.
+TEST_P(Runs, MassAndMomentumConservedThroughSplitsAndRestores) {
+  const Params p = churn_params();
   auto sim = make(make_grid(24), p);
   const Totals t0 = sim->totals();
   long splits = 0, restores = 0;
@@ -116,12 +122,7 @@ TEST_P(Runs, SphereCrumpleDefaults) {
 // set_adaptivity: with fracture and restoration off the topology stays exactly as it was while
 // the sheet keeps moving; each switch alone stops only its own events; on again, both resume.
 TEST_P(Runs, AdaptivitySwitchesFreezeAndResumeTheTopology) {
-  Params p;
-  p.scene = Scene::Free;
-  p.squeeze = 0.6;
-  p.phi = 0.2;
-  p.epsilon = 0.15;
-  p.floor = 0.05;
+  const Params p = churn_params();
   auto sim = make(make_grid(24), p);
   long splits = 0, restores = 0;
   for (int step = 0; step < 300 && (splits < 50 || restores < 50); ++step) {
