@@ -133,7 +133,10 @@ Prepared& prepared(const std::string& backend, int threads, int n) {
 // physics of those frames alone, with the topology frozen. BM_Frame minus BM_Frozen is what the
 // events cost (fracture and restoration tests, splits, restores, relayouts), which
 // scripts/bench_report.py divides by the events per frame. (A frozen step computes the normals
-// at its start, where an adaptive step has them from its fracture test: that pass is in both.)
+// at its start, where an adaptive step has them from its fracture test: that pass is in both.
+// The frozen frames keep the prepared mesh, which the adaptive ones grow by ~1 % a frame, so
+// the difference also holds the physics of the elements the events add; BM_Frozen's vertices
+// and edges counters are the adaptive dry run's.)
 void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, bool frozen) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   Prepared& p = prepared(backend, threads, n);

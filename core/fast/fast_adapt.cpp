@@ -17,8 +17,12 @@ namespace {
 constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §4)
 
 template <class T>
-void prefetch(const T* p) {
+void prefetch(const T* p) {  // for lines the event will write
   __builtin_prefetch(p, 1, 3);
+}
+template <class T>
+void prefetch_read(const T* p) {  // for lines it only reads (no claim on other cores' copies)
+  __builtin_prefetch(p, 0, 3);
 }
 /// The per-edge lines an event on edge e reads first.
 void prefetch_edge(const Topology& m, int e) {
@@ -372,14 +376,14 @@ void FastSimulator::renew_normals() {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
       if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch(&V.x[v]), prefetch(&V.y[v]), prefetch(&V.z[v]);
+        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.x[v]), prefetch_read(&V.y[v]), prefetch_read(&V.z[v]);
       triangle_areas(topo_, changed[k], changed[k] + 1);
     }
   });
   par_.run(int(changed.size()), 512, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch(&V.n_tris[v]), prefetch(topo_.tris_of(v));
+        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.n_tris[v]), prefetch_read(topo_.tris_of(v));
       const int t = changed[k];
       if (!topo_.T.alive[t]) continue;
       for (int v : topo_.T.corners(t)) {

@@ -289,7 +289,9 @@ namespace {
 // P = 1/4 c (1 - phi n_ij)(1 + phi n_rl) with c = 1 - lt/l0, made per step by
 // P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the edge's counter-based random
 // number. Restoration of an auxiliary edge: its crease (wings l, r of its split) is bent
-// across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so P_step = P (no pow).
+// across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so P_step = P (no pow): that
+// instance (one step per frame, the default) vectorizes; with substeps, the pow keeps the loop
+// scalar (GCC has no vector powf without -ffast-math).
 template <bool exact_step>
 void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
                 const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,

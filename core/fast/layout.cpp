@@ -31,7 +31,8 @@ std::uint64_t spread3(std::uint64_t v) {
 /// the serial pass's on any thread count.
 template <class Key, class Place>
 void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
-  const int blocks = std::clamp(n / kGrain, 1, par.threads());
+  // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
+  const int blocks = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
   const int per = (n + blocks - 1) / blocks;
   hist.assign(std::size_t(blocks) * buckets, 0);
   par.run(blocks, 1, [&](int b0, int b1) {

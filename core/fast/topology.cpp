@@ -47,8 +47,8 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
 // A slot for a new element: the newest freed logical id and its slot (LIFO, the id policy of
 // sim/simulator.h), or a new id and slot at the end (both ranges always have the same size).
 // The slot of a recycled id is a random read (phys[id]), and a pass takes thousands in a row:
-// each take prefetches the slot of the id kTakeAhead pops deeper, so that the pops find it in
-// cache.
+// each take prefetches the phys entry of the id that the take kTakeAhead + 1 from now will pop,
+// so that the pops find it in cache.
 constexpr std::size_t kTakeAhead = 8;
 template <class Kind>
 int take_slot(Kind& k, std::size_t size) {

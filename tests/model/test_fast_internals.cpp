@@ -160,10 +160,6 @@ TEST(Layout, RelayoutEveryStepChangesNoBit) {
   }
 }
 
-// One relayout of a crumpled state (default approximate implicit method): the interface sees
-// the same state, forces, normals and decisions, bit for bit; the next step agrees to float
-// round-off (only the momentum correction's summation order changed); neighbours are stored
-// much closer together than before.
 // The relayout's sorts run as per-thread blocks on two threads (layout.cpp's stable_pass): the
 // slot order they give must be the one thread's, element for element. 96 x 96, so that every
 // sort has over two blocks' worth of items.
@@ -188,6 +184,10 @@ TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
   EXPECT_EQ(one.t, two.t);
 }
 
+// One relayout of a crumpled state (default approximate implicit method): the interface sees
+// the same state, forces, normals and decisions, bit for bit; the next step agrees to float
+// round-off (only the momentum correction's summation order changed); neighbours are stored
+// much closer together than before.
 TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 1);
