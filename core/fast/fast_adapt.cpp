@@ -385,8 +385,8 @@ void FastSimulator::renew_normals() {
       if (k + kNear < e)
         for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.n_tris[v]), prefetch_read(topo_.tris_of(v));
       const int t = changed[k];
-      if (!topo_.T.alive[t]) continue;
-      for (int v : topo_.T.corners(t)) {
+      if (!T.alive[t]) continue;
+      for (int v : T.corners(t)) {
         std::atomic_ref<std::uint64_t> mark(vertex_stamp_[v]);
         std::uint64_t seen = mark.load(std::memory_order_relaxed);
         if (seen != pass_ && mark.compare_exchange_strong(seen, pass_, std::memory_order_relaxed))

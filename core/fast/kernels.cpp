@@ -58,6 +58,14 @@ alignas(64) const EdgeOut kZeroRow{};
 const Float4 kZero4{};
 using Row4 = Wide<4>;
 
+/// Calls f(entry, in_list) for the first kFixed slots of a list of n entries (in_list false past
+/// n: f reads its zero record then), and f(entry, true) for the rest: the loop every list sum uses.
+template <class F>
+void for_list(const std::int32_t* list, int n, F f) {
+  for (int k = 0; k < kFixed; ++k) f(list[k], k < n);
+  for (int k = kFixed; k < n; ++k) f(list[k], true);
+}
+
 // The 64-byte records the gather reads are scattered, and a vertex's loads are few, so the
 // gather fetches the first kFixed records of the vertex kAhead places on while it sums this one
 // (entries past a list's count fetch the zero record). Gather 7.2 -> 4.5 ms at N = 256, 1 thread
@@ -79,8 +87,7 @@ void vertex_normals(Topology& m, int begin, int end) {
     Row4 sum = Row4::zero();
     const std::int32_t* list = tris + std::size_t(v) * stride;
     const int n = count[v];
-    for (int k = 0; k < kFixed; ++k) sum += Row4::load(k < n ? &area[list[k] >> 2] : &kZero4);
-    for (int k = kFixed; k < n; ++k) sum += Row4::load(&area[list[k] >> 2]);
+    for_list(list, n, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
     const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
     const float inv = len > 0 ? 1.0f / len : 0.0f;
@@ -162,14 +169,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     Row sum = Row::zero();
     const std::int32_t* springs = &V.springs[std::size_t(v) * se];
     const int ns = V.n_springs[v], nt = V.n_tris[v];
-    for (int k = 0; k < kFixed; ++k) {
-      const EdgeOut* o = k < ns ? &out[springs[k] >> 1] : &kZeroRow;
-      sum += Row::load(o) * kAsEndpoint[springs[k] & 1];
-    }
-    for (int k = kFixed; k < ns; ++k) sum += Row::load(&out[springs[k] >> 1]) * kAsEndpoint[springs[k] & 1];
+    for_list(springs, ns, [&](int x, bool in) {
+      sum += Row::load(in ? &out[x >> 1] : &kZeroRow) * kAsEndpoint[x & 1];
+    });
     const std::int32_t* wings = &V.wings[std::size_t(v) * st];  // v is a wing of the edge opposite it
-    for (int k = 0; k < kFixed; ++k) sum += Row::load(k < nt ? &out[wings[k]] : &kZeroRow) * kAsWing;
-    for (int k = kFixed; k < nt; ++k) sum += Row::load(&out[wings[k]]) * kAsWing;
+    for_list(wings, nt, [&](int x, bool in) { sum += Row::load(in ? &out[x] : &kZeroRow) * kAsWing; });
     float fx = sum[0], fy = sum[1], fz = sum[2];
     const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of kappa_e (v_other - v_v)
     const float kn = sum[7], mx = sum[8], my = sum[9], mz = sum[10];  // f = -k n_v (hinge), +k n_v (wing), - mean
@@ -207,6 +211,8 @@ void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
       const Row4 o = Row4::load(p);
       sum += (c.kappa * (mass + o[3])) * o;  // kappa_e [Eq 5] (the neighbour's mass in w) times its guess
     };
+    // for_list's loops, written out: through for_list GCC contracts this multiply-add into FMAs
+    // differently, which changes the rounding of every run (state hashes differ from 15d8759).
     for (int k = 0; k < kFixed; ++k) add(k < n ? &g[nbrs[k]] : &kZero4);
     for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
     const float sx = sum[0], sy = sum[1], sz = sum[2];

@@ -81,8 +81,9 @@ void counting_order(const Parallel& par, LayoutScratch& s, int buckets, std::vec
               [&](int k, int to) { order[to] = k; });
 }
 
-/// of[old] = new from order[new] = old.
-void inverse(const Parallel& par, const std::vector<int>& order, std::vector<int>& of) {
+/// of[old] = new from order[new] = old (each entry written once: no race).
+template <class From, class To>
+void inverse(const Parallel& par, const From& order, To& of) {
   of.resize(order.size());
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) of[order[k]] = k;
@@ -269,16 +270,10 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
     }
   });
 
-  // The inverse maps (each entry written once: no race); free lists hold logical ids and do
-  // not change.
-  auto invert = [&](Array<std::int32_t>& phys, const Array<std::int32_t>& lid, int n) {
-    par.run(n, kGrain, [&](int b, int e) {
-      for (int k = b; k < e; ++k) phys[lid[k]] = k;
-    });
-  };
-  invert(V.phys, V.lid, nv);
-  invert(E.phys, E.lid, ne);
-  invert(T.phys, T.lid, nt);
+  // The inverse maps; free lists hold logical ids and do not change.
+  inverse(par, V.lid, V.phys);
+  inverse(par, E.lid, E.phys);
+  inverse(par, T.lid, T.phys);
   V.created = E.created = T.created = 0;
 }
 

@@ -51,7 +51,8 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
 // so that the pops find it in cache.
 constexpr std::size_t kTakeAhead = 8;
 template <class Kind>
-int take_slot(Kind& k, std::size_t size) {
+int take_slot(Kind& k) {
+  const std::size_t size = k.lid.size();
   ++k.created;
   if (!k.free_ids.empty()) {
     const int id = k.free_ids.back();
@@ -73,11 +74,11 @@ int Topology::new_vertex() {
 
 void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
 
-int Topology::take_vertex() { return take_slot(V, V.lid.size()); }
+int Topology::take_vertex() { return take_slot(V); }
 
-int Topology::take_edge() { return take_slot(E, E.lid.size()); }
+int Topology::take_edge() { return take_slot(E); }
 
-int Topology::take_triangle() { return take_slot(T, T.lid.size()); }
+int Topology::take_triangle() { return take_slot(T); }
 
 void Topology::fit() {
   if (const std::size_t n = V.lid.size(); n != V.m.size()) {
@@ -91,11 +92,6 @@ void Topology::fit() {
     grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
     grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
-}
-
-void Topology::free_vertex(int v) {
-  release_vertex(v);
-  V.free_ids.push_back(V.lid[v]);
 }
 
 void Topology::release_vertex(int v) {
@@ -122,11 +118,6 @@ void Topology::init_edge(int e, int a, int b, float l0) {
   list_spring(b, (e << 1) | 1, a);
 }
 
-void Topology::free_edge(int e) {
-  release_edge(e);
-  E.free_ids.push_back(E.lid[e]);
-}
-
 void Topology::release_edge(int e) {
   unlist_spring(E.a[e], e << 1);
   unlist_spring(E.b[e], (e << 1) | 1);
@@ -144,17 +135,11 @@ int Topology::new_triangle() {
   return t;
 }
 
-
 void Topology::init_triangle(int t) {
   T.v0[t] = T.v1[t] = T.v2[t] = 0;
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
   T.alive[t] = 1;
   T.area[t] = Float4{};
-}
-
-void Topology::free_triangle(int t) {
-  release_triangle(t);
-  T.free_ids.push_back(T.lid[t]);
 }
 
 void Topology::release_triangle(int t) {
@@ -225,8 +210,6 @@ void Topology::detach(int t) {
   for (int k = 0; k < 3; ++k) unlist_tri(v[k], (t << 2) | k);
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
 }
-
-
 
 void Topology::list_spring(int v, int entry, int other) {
   if (V.n_springs[v] == V.stride_e) widen(true);

@@ -91,7 +91,7 @@ struct Vertices {
   Array<std::uint16_t> n_springs; ///< used slots in springs
   Array<std::uint16_t> n_tris;    ///< used slots in tris
   Array<std::int32_t> lid;        ///< logical id of each slot
-  Array<std::int32_t> phys; ///< slot of each logical id (the inverse of lid)
+  Array<std::int32_t> phys;       ///< slot of each logical id (the inverse of lid)
   int stride_e = 16;              ///< slots per vertex in springs
   int stride_t = 16;              ///< slots per vertex in tris
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
@@ -111,7 +111,7 @@ struct Edges {
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
   Array<EdgeOut> out;            ///< per-step output of the edge pass
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
-  Array<std::int32_t> phys; ///< slot of each logical id
+  Array<std::int32_t> phys;      ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
   std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
@@ -124,7 +124,7 @@ struct Triangles {
   Array<std::uint8_t> alive;       ///< 1: in use
   Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
   Array<std::int32_t> lid;         ///< logical id of each slot
-  Array<std::int32_t> phys; ///< slot of each logical id
+  Array<std::int32_t> phys;        ///< slot of each logical id
   std::vector<int> free_ids;       ///< LIFO free list of logical ids
   std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
@@ -163,13 +163,11 @@ class Topology {
   void init_triangle(int t);
   /// Widens the adjacency strides until a list can hold this many springs / triangles.
   void make_room(int springs, int tris);
-  void free_vertex(int v);
-  void free_edge(int e);  ///< unlists it from its endpoints
-  void free_triangle(int t);
-  // free_X is release_X (clears the slot: may run in parallel for elements of disjoint vertices)
-  // then puts its id on the free list (serial, in event order: free_ids for a batch).
+  // Freeing is release_X (clears the slot: may run in parallel for elements of disjoint
+  // vertices), then free_ids, which puts the released ids on the free lists (serial, in event
+  // order).
   void release_vertex(int v);
-  void release_edge(int e);
+  void release_edge(int e);  ///< unlists it from its endpoints
   void release_triangle(int t);
   void free_ids(const Freed& f);
 
