@@ -1,5 +1,6 @@
 // The `crumple` command: parses options (CLI11) and dispatches to the run command.
 #include <CLI/CLI.hpp>
+#include <charconv>
 #include <cstdio>
 #include <map>
 
@@ -30,7 +31,18 @@ int main(int argc, char** argv) {
   run->add_option("--frame-dt", p.frame_dt, "seconds per frame (h = frame-dt / substeps)")->capture_default_str();
   run->add_option("--squeeze", p.squeeze, "free scene: initial scale about the centroid")->capture_default_str();
   run->add_option("--frames", o.frames, "frames of 1/60 s")->capture_default_str();
-  run->add_option("--substeps", p.substeps, "steps per frame")->capture_default_str();
+  run->add_option_function<std::string>(
+         "--substeps",
+         [&p](const std::string& s) {
+           int n = 0;
+           const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), n);
+           p.auto_substeps = s == "auto";
+           if (p.auto_substeps) return;
+           if (ec != std::errc() || end != s.data() + s.size())
+             throw CLI::ValidationError("--substeps", "must be a whole number or auto, got '" + s + "'");
+           p.substeps = n;
+         },
+         "steps per frame, or auto: chosen each frame from the mesh's stiffest mode (default 1)");
   run->add_option("--integrator", p.integrator, "approx | explicit | implicit")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},

@@ -92,7 +92,7 @@ int run(const RunOptions& o) {
   int frame = 1;
   try {
     for (; frame <= o.frames; ++frame) {
-      const FrameStats s = run_frame(*sim, o.params.substeps, frame);
+      const FrameStats s = run_frame(*sim, o.params, frame);
       splits += s.splits;
       restores += s.restores;
       total_ms += s.step_ms;

@@ -32,6 +32,8 @@ struct Params {
   // --- time integration (MODEL.md §3) ---
   double frame_dt = 1.0 / 60.0;          ///< one frame of simulated time
   int substeps = 1;                      ///< steps per frame: h = frame_dt / substeps
+  bool auto_substeps = false;            ///< substeps chosen each frame from the stiffest mode
+                                         ///< of the current mesh (sim/run.h choose_substeps)
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit

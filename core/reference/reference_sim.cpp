@@ -89,6 +89,19 @@ void ReferenceSimulator::apply_sphere() {
   }
 }
 
+double ReferenceSimulator::stiffness_bound() const {
+  std::vector<double> row(mesh_.verts.size(), 0.0);
+  for (const Edge& E : mesh_.edges) {
+    if (!E.alive) continue;
+    const double ma = mesh_.verts[E.a].m, mb = mesh_.verts[E.b].m, off = (ma + mb) / std::sqrt(ma * mb);
+    row[E.a] += (ma + mb) / ma + off;
+    row[E.b] += (ma + mb) / mb + off;
+  }
+  double mu = 0;
+  for (double r : row) mu = std::max(mu, r);
+  return mu;
+}
+
 Totals ReferenceSimulator::totals() const {
   Totals T;
   T.vertices = mesh_.live_vertices();

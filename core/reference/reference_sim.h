@@ -28,6 +28,8 @@ class ReferenceSimulator final : public Simulator {
     params_.fracture = fracture;
     params_.restoration = restoration;
   }
+  void set_substeps(int substeps) override { params_.substeps = substeps; }
+  double stiffness_bound() const override;
   double time() const override { return time_; }
   std::uint64_t steps() const override { return steps_; }
   Totals totals() const override;

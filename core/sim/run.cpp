@@ -1,5 +1,6 @@
 #include "sim/run.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -7,21 +8,22 @@
 namespace crumple {
 
 const char* stats_header() {
-  return "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms";
+  return "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms,substeps";
 }
 
 std::string stats_row(const FrameStats& s) {
   char buf[512];
   const Totals& t = s.totals;
-  std::snprintf(buf, sizeof buf, "%d,%.6f,%d,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.4f",
+  std::snprintf(buf, sizeof buf, "%d,%.6f,%d,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.4f,%d",
                 s.frame, s.time, t.vertices, t.edges, t.triangles, s.splits, s.restores, t.mass,
-                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, s.step_ms);
+                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, s.step_ms, s.substeps);
   return buf;
 }
 
 FrameStats run_frame(Simulator& sim, int substeps, int frame) {
   FrameStats s;
   s.frame = frame;
+  s.substeps = substeps;
   const auto t0 = std::chrono::steady_clock::now();
   for (int k = 0; k < substeps; ++k) {
     const StepEvents ev = sim.step();
@@ -32,6 +34,25 @@ FrameStats run_frame(Simulator& sim, int substeps, int frame) {
   s.time = sim.time();
   s.totals = sim.totals();
   return s;
+}
+
+double max_stable_step(const Params& p, double mu) {
+  if (p.integrator != Integrator::Explicit || !(mu > 0) || !(p.kappa > 0)) return INFINITY;
+  const double km = p.kappa * mu, cm = p.viscosity * mu;
+  return kStableStepSafety * (cm + std::sqrt(cm * cm + 4 * km)) / km;  // root of h^2 km = 4 + 2 h cm
+}
+
+int choose_substeps(const Params& p, double mu) {
+  return int(std::clamp(std::ceil(p.frame_dt / max_stable_step(p, mu)), 1.0, 10000.0));
+}
+
+FrameStats run_frame(Simulator& sim, const Params& p, int frame) {
+  int substeps = p.substeps;
+  if (p.auto_substeps) {
+    substeps = choose_substeps(p, sim.stiffness_bound());
+    sim.set_substeps(substeps);
+  }
+  return run_frame(sim, substeps, frame);
 }
 
 std::string instability(const Totals& t, double size) {

@@ -17,6 +17,7 @@ struct FrameStats {
   int splits = 0;         ///< splits during the frame
   int restores = 0;       ///< restores during the frame
   double step_ms = 0;     ///< wall time of the frame
+  int substeps = 1;       ///< steps taken in the frame
 };
 
 /// The stats.csv header (exactly as documented in README.md).
@@ -24,8 +25,22 @@ const char* stats_header();
 /// One CSV line for s (no newline).
 std::string stats_row(const FrameStats& s);
 
-/// Advances one frame (params.substeps steps) and returns its statistics.
+/// Advances one frame (substeps steps) and returns its statistics.
 FrameStats run_frame(Simulator& sim, int substeps, int frame);
+/// Advances one frame of p.substeps steps, or with p.auto_substeps of choose_substeps(p,
+/// sim.stiffness_bound()) steps (the backend is told the count first).
+FrameStats run_frame(Simulator& sim, const Params& p, int frame);
+
+/// The largest step at which a method stays stable on a mesh whose stiffest mode is bounded by
+/// mu (Simulator::stiffness_bound), times kStableStepSafety. Symplectic Euler with the implicit
+/// viscosity c (D17) is stable on a mode of stiffness kappa mu and damping c mu while
+/// h^2 kappa mu <= 4 + 2 h c mu. The approximate implicit method and Baraff-Witkin are stable
+/// at any step (infinity).
+double max_stable_step(const Params& p, double mu);
+/// Room below the bound for what it leaves out (bending, springs compressed below half length).
+constexpr double kStableStepSafety = 0.95;
+/// Steps per frame for max_stable_step: ceil(frame_dt / h_max), in [1, 10000].
+int choose_substeps(const Params& p, double mu);
 
 /// Empty if the state is sane; otherwise why it is not: a non-finite value, or a vertex that has
 /// gone past 100 sheet sizes from the centre or faster than 1e4 sheet sizes per second, or mesh

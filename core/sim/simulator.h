@@ -96,6 +96,17 @@ class Simulator {
   /// frames both ways to price the events (BM_Frozen in bench/bench_frame.cpp).
   virtual void set_adaptivity(bool fracture, bool restoration) = 0;
 
+  /// Steps per frame from now on (h = frame_dt / substeps): run_frame's automatic choice.
+  virtual void set_substeps(int substeps) = 0;
+
+  /// A bound on the stiffest mode of the current mesh per unit kappa: the largest Gershgorin row
+  /// sum of M^-1/2 L M^-1/2 (same eigenvalues as M^-1 L), L the Laplacian weighted by
+  /// m_i + m_j ([Eq 5]): mu = max_i sum_{e=(i,j)} (m_i + m_j) (1 / m_i + 1 / sqrt(m_i m_j)).
+  /// omega_max^2 <= kappa mu for the springs (each spring's 3 x 3 block has norm kappa_e while
+  /// it is longer than half its rest length) and gamma_max <= c mu for the viscosity (D17).
+  /// A split's light new vertex raises it.
+  virtual double stiffness_bound() const = 0;
+
   /// Simulated time and number of steps taken.
   virtual double time() const = 0;
   virtual std::uint64_t steps() const = 0;

@@ -67,7 +67,7 @@ TEST(Cli, RunWritesStatsAndFinalObj) {
   std::ifstream stats(d / "stats.csv");
   std::string header, line;
   std::getline(stats, header);
-  EXPECT_EQ(header, "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms");
+  EXPECT_EQ(header, "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms,substeps");
   int rows = 0;
   while (std::getline(stats, line)) ++rows;
   EXPECT_EQ(rows, 30);

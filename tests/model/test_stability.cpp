@@ -351,6 +351,62 @@ TEST_P(Stability, BoundedAfterHeavyFracture) {
   EXPECT_GE(hard_splits, 20);
 }
 
+// --substeps auto (sim/run.h choose_substeps): the step it picks for symplectic Euler, with and
+// without the viscosity (D17), on a grid with uneven masses (as fracture leaves them, [Eq 3]),
+// is stable and no less than half of the largest stable step found by bisection.
+TEST_P(Stability, AutoSubstepsStableAndWithinTwiceTheObservedLimit) {
+  const InputMesh mesh = make_grid(10);
+  std::vector<double> masses;
+  {
+    auto sim = make(mesh, spring_only(1, Integrator::Explicit));
+    masses = sim->snapshot().mass;
+    std::mt19937_64 rng(99);
+    std::uniform_real_distribution<double> light(0.15, 1.0);
+    for (double& m : masses) m *= light(rng);
+  }
+  for (double kappa : {1e2, 1e4, 1e7})
+    for (double c : {0.0, 30.0}) {
+      Params p = spring_only(kappa, Integrator::Explicit);
+      p.viscosity = c;
+      auto sim = make(mesh, p);
+      sim->set_masses(masses);
+      const double h_auto = max_stable_step(p, sim->stiffness_bound());
+      const double h_limit = observed_limit(GetParam(), mesh, p, h_auto / 4, 4 * h_auto, 300, &masses);
+      const std::string label = "kappa " + num(kappa) + " c " + num(c) + ": auto " + num(h_auto) + " limit " + num(h_limit);
+      RecordProperty("auto_over_limit kappa " + num(kappa) + " c " + num(c), num(h_auto / h_limit));
+      EXPECT_LE(h_auto, h_limit) << label;
+      EXPECT_GE(h_auto, h_limit / 2) << label;
+    }
+}
+
+// The sphere crumple with symplectic Euler and --substeps auto stays bounded from kappa 1e2 to
+// 1e7, with and without the viscosity, and takes more steps where the sheet is stiffer.
+TEST_P(Stability, AutoSubstepsKeepTheCrumpleBounded) {
+  const InputMesh mesh = make_grid(12);
+  for (double c : {0.0, 167.0}) {
+    int first_substeps = 0, last_substeps = 0;
+    for (double kappa : {1e2, 1e4, 1e7}) {
+      Params p;
+      p.integrator = Integrator::Explicit;
+      p.kappa = kappa;
+      p.viscosity = c;
+      p.auto_substeps = true;
+      auto sim = make(mesh, p);
+      const double size = make_scene(mesh, p).size;
+      FrameStats s;
+      for (int f = 1; f <= 45; ++f) {
+        s = run_frame(*sim, p, f);
+        ASSERT_EQ(instability(s.totals, size), "") << "kappa " << kappa << " c " << c << " frame " << f;
+      }
+      EXPECT_EQ(sim->check_topology(), "");
+      EXPECT_GE(s.substeps, last_substeps) << "kappa " << kappa << " c " << c;
+      last_substeps = s.substeps;
+      first_substeps = first_substeps ? first_substeps : s.substeps;
+    }
+    EXPECT_GT(last_substeps, 10 * first_substeps) << "c " << c;
+  }
+}
+
 CRUMPLE_FOR_EACH_BACKEND(Stability);
 
 }  // namespace

@@ -1,0 +1,193 @@
+#!/usr/bin/python3
+"""The converged crumple and what each method costs to get near it (issue 12).
+
+    /usr/bin/python3 scripts/crumple_study.py STAGE [--quick] [--jobs 2]
+
+Stages (each writes its part of results/accuracy/crumple/crumple.json and its charts):
+  calibrate  the paper's configuration at 60 Hz against converged crumples with a range of
+             viscosities c (symplectic Euler + implicit viscosity, D17), N = 64 and 128
+  converge   the default viscosity's crumple with substeps doubled until every statistic's seed
+             mean moves by less than its seed spread (8 seeds)
+  framerate  the default configuration at --frame-dt 1/30, 1/60, 1/120, 1/240 (the same 3 s)
+
+Runs go through scripts/crumple_stats.py, one crumple process per job on one thread (the fast
+backend is bit-identical on any thread count, so statistics do not depend on it; timings here
+are not used). Every run's result is cached in runs.json by its command line, so a stage re-run
+only runs what is new; --fresh drops the cache.
+"""
+import argparse
+import concurrent.futures as cf
+import json
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import crumple_stats  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OUT = os.environ.get("CRUMPLE_CRUMPLE_OUT", os.path.join(ROOT, "results", "accuracy", "crumple"))
+STATS = ["splits", "restores", "vertices", "radius_norm", "crease_norm", "edge_mean", "kinetic_end"]
+KAPPA_H_REF = 1e4 / 60.0  # c = h_ref kappa: the paper's step at h_ref = 1/60 (D17)
+
+
+def paper(n, seed, extra=()):
+    return ["--grid", n, "--seed", seed, "--backend", "fast", "--threads", 1] + list(extra)
+
+
+def viscous(n, seed, c, substeps, kappa=1e4, extra=()):
+    return paper(n, seed, ["--integrator", "explicit", "--viscosity", c, "--substeps", substeps,
+                           "--kappa", kappa] + list(extra))
+
+
+class Runner:
+    """Runs crumple_stats.measure over many command lines, jobs at a time, with a cache."""
+
+    def __init__(self, jobs, fresh=False):
+        self.jobs = jobs
+        self.path = os.path.join(OUT, "runs.json")
+        self.cache = {} if fresh or not os.path.exists(self.path) else json.load(open(self.path))
+
+    def run(self, arg_lists):
+        keys = [" ".join(str(a) for a in args) for args in arg_lists]
+        todo = [(k, a) for k, a in zip(keys, arg_lists) if k not in self.cache]
+        todo = list(dict(todo).items())
+        with cf.ThreadPoolExecutor(self.jobs) as pool:
+            futures = {pool.submit(self._one, a): k for k, a in todo}
+            for i, f in enumerate(cf.as_completed(futures)):
+                self.cache[futures[f]] = f.result()
+                print(f"  [{i + 1}/{len(todo)}] {futures[f]}", file=sys.stderr, flush=True)
+                self.save()
+        return [self.cache[k] for k in keys]
+
+    @staticmethod
+    def _one(args):
+        with tempfile.TemporaryDirectory() as d:
+            return crumple_stats.measure(args, d)
+
+    def save(self):
+        os.makedirs(OUT, exist_ok=True)
+        with open(self.path + ".tmp", "w") as f:
+            json.dump(self.cache, f)
+        os.replace(self.path + ".tmp", self.path)
+
+
+def summary(runs):
+    """Seed mean and spread (sample standard deviation) of each statistic over runs."""
+    ok = [r for r in runs if r.get("exit") == 0]
+    out = {"seeds": len(runs), "failed": len(runs) - len(ok)}
+    for s in STATS:
+        v = np.array([r[s] for r in ok], float)
+        out[s] = {"mean": float(v.mean()) if len(v) else None,
+                  "sd": float(v.std(ddof=1)) if len(v) > 1 else None}
+    return out
+
+
+def load_result():
+    path = os.path.join(OUT, "crumple.json")
+    return json.load(open(path)) if os.path.exists(path) else {}
+
+
+def save_result(data):
+    os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(OUT, "crumple.json"), "w") as f:
+        json.dump(data, f, indent=1)
+
+
+def stage_calibrate(runner, quick):
+    sizes = [32] if quick else [64, 128]
+    seeds = range(1, 3 if quick else 5)
+    cs = [60, 90, 120, KAPPA_H_REF, 250]
+    substeps = 16
+    result = {"substeps": substeps, "sizes": {}}
+    for n in sizes:
+        lines = [paper(n, s) for s in seeds]
+        lines += [viscous(n, s, c, substeps) for c in cs for s in seeds]
+        runs = runner.run(lines)
+        k = len(seeds)
+        entry = {"paper": summary(runs[:k]), "viscous": {}}
+        for i, c in enumerate(cs):
+            entry["viscous"][f"{c:g}"] = summary(runs[k * (i + 1):k * (i + 2)])
+        result["sizes"][str(n)] = entry
+        print_calibration(n, entry)
+    return result
+
+
+def print_calibration(n, entry):
+    def row(name, s):
+        cells = " ".join(f"{s[k]['mean']:.4g}±{(s[k]['sd'] or 0):.2g}" for k in STATS[:6])
+        print(f"N={n:4d} {name:>10s}: {cells}")
+    print("      " + " ".join(STATS[:6]))
+    row("paper", entry["paper"])
+    for c, s in entry["viscous"].items():
+        row(f"c={c}", s)
+
+
+DEFAULT_C = KAPPA_H_REF  # the default viscosity chosen by the calibration (D18)
+WOODY = ["--mesh", os.path.join(ROOT, "tests", "data", "woody.obj")]
+# (label, input options, kappa, substep levels, the finest level run even when converged).
+# Levels start where symplectic Euler with c is stable (h kappa <= 2 c, D17).
+CONVERGE_CASES = [
+    ("N32_k1e4", ["--grid", 32], 1e4, [1, 2, 4, 8, 16, 32, 64, 128], 32),
+    ("N64_k1e4", ["--grid", 64], 1e4, [1, 2, 4, 8, 16, 32, 64], 32),
+    ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64], 16),
+    ("N32_k1e5", ["--grid", 32], 1e5, [8, 16, 32, 64, 128, 256], 64),
+    ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128], 64),
+    ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128], 64),
+    ("woody_k1e4", WOODY, 1e4, [1, 2, 4, 8, 16, 32, 64], 32),
+]
+
+
+def moved_within_spread(a, b):
+    """Every statistic's seed mean moved by less than its seed spread from level a to level b."""
+    return all(abs(b[s]["mean"] - a[s]["mean"]) < max(a[s]["sd"], b[s]["sd"]) for s in STATS)
+
+
+def stage_converge(runner, quick, only=None):
+    seeds = range(1, 4 if quick else 9)
+    cases = CONVERGE_CASES[:1] if quick else [c for c in CONVERGE_CASES if not only or c[0] in only]
+    result = load_result().get("converge", {"viscosity": DEFAULT_C, "seeds": len(seeds), "cases": {}})
+    for label, mesh, kappa, levels, finest in cases:
+        entry = {"kappa": kappa, "levels": {}, "converged_at": None}
+        prev = None
+        for S in levels:
+            runs = runner.run([["--seed", s, "--backend", "fast", "--threads", 1, "--integrator", "explicit",
+                                "--viscosity", DEFAULT_C, "--substeps", S, "--kappa", kappa] + mesh for s in seeds])
+            cur = summary(runs)
+            entry["levels"][str(S)] = cur
+            print(f"{label} S={S}: failed {cur['failed']} " + " ".join(
+                f"{k}={cur[k]['mean']:.4g}±{cur[k]['sd'] or 0:.2g}" for k in STATS if cur[k]["mean"] is not None),
+                flush=True)
+            if entry["converged_at"] is None and prev and not (cur["failed"] or prev["failed"]) \
+                    and moved_within_spread(prev, cur):
+                entry["converged_at"] = S
+            if entry["converged_at"] is not None and S >= finest:
+                break
+            prev = cur
+        result["cases"][label] = entry
+    return result
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("stage", choices=["calibrate", "converge"])
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--jobs", type=int, default=2)
+    p.add_argument("--fresh", action="store_true")
+    p.add_argument("--cases", nargs="*", help="converge: only these cases (labels)")
+    a = p.parse_args(argv)
+    if not os.path.exists(crumple_stats.EXE):
+        sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
+    runner = Runner(a.jobs, a.fresh)
+    data = load_result()
+    if a.stage == "converge":
+        data[a.stage] = stage_converge(runner, a.quick, a.cases)
+    else:
+        data[a.stage] = stage_calibrate(runner, a.quick)
+    save_result(data)
+
+
+if __name__ == "__main__":
+    main()
