@@ -43,10 +43,11 @@ int main(int argc, char** argv) {
            p.substeps = n;
          },
          "steps per frame, or auto: chosen each frame from the mesh's stiffest mode (default 1)");
-  run->add_option("--integrator", p.integrator, "approx | explicit | implicit")
+  run->add_option("--integrator", p.integrator, "approx | explicit | implicit | xpbd")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},
-                                      {"implicit", Integrator::Implicit}}));
+                                      {"implicit", Integrator::Implicit},
+                                      {"xpbd", Integrator::Xpbd}}));
   run->add_option("--sweeps", p.sweeps, "K, Jacobi sweeps of the approximate implicit method")->capture_default_str();
   run->add_option("--predictor", p.predictor, "approx: bounded | explicit (the paper's, unstable when stiff)")
       ->transform(choice<Predictor>({{"bounded", Predictor::Bounded}, {"explicit", Predictor::Explicit}}));

@@ -25,6 +25,8 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
     : params_(params), scene_(make_scene(input, params)), par_(threads) {
   if (params_.integrator == Integrator::Implicit)
     throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
+  if (params_.integrator == Integrator::Xpbd)
+    throw std::invalid_argument("the fast backend has no XPBD integrator yet; use --backend reference");
   if (params_.integrator == Integrator::Approx && params_.jacobian == Jacobian::Axial)
     throw std::invalid_argument("the fast backend has no axial Jacobian yet; use --backend reference");
   const int nv = int(input.positions.size());

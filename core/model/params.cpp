@@ -41,7 +41,10 @@ std::string Params::validate() const {
 
 const char* to_string(Scene s) { return s == Scene::Sphere ? "sphere" : s == Scene::Free ? "free" : "hang"; }
 const char* to_string(Integrator i) {
-  return i == Integrator::Approx ? "approx" : i == Integrator::Explicit ? "explicit" : "implicit";
+  return i == Integrator::Approx     ? "approx"
+         : i == Integrator::Explicit ? "explicit"
+         : i == Integrator::Implicit ? "implicit"
+                                     : "xpbd";
 }
 const char* to_string(RestoreForm r) { return r == RestoreForm::Exact ? "exact" : "paper"; }
 const char* to_string(Predictor p) { return p == Predictor::Bounded ? "bounded" : "explicit"; }

@@ -8,7 +8,7 @@
 namespace crumple {
 
 enum class Scene { Sphere, Free, Hang };            ///< MODEL.md §8; Hang: two corners pinned
-enum class Integrator { Approx, Explicit, Implicit };  ///< MODEL.md §3
+enum class Integrator { Approx, Explicit, Implicit, Xpbd };  ///< MODEL.md §3
 enum class RestoreForm { Exact, Paper };            ///< MODEL.md §7
 enum class BendingForm { Balanced, Paper };         ///< MODEL.md §6
 /// Where the approximate implicit method's Jacobi sweeps start (docs/DECISIONS.md, D1).

@@ -68,12 +68,17 @@ void ReferenceSimulator::add_bending_forces(const std::vector<V3>& n, std::vecto
   }
 }
 
-std::vector<V3> ReferenceSimulator::total_forces() const {
+std::vector<V3> ReferenceSimulator::external_forces() const {
   std::vector<V3> f(mesh_.verts.size(), V3::Zero());
-  add_spring_forces(f);
   add_bending_forces(vertex_normals(), f);
   for (size_t k = 0; k < f.size(); ++k)
     if (mesh_.verts[k].alive) f[k].z() -= mesh_.verts[k].m * params_.gravity;
+  return f;
+}
+
+std::vector<V3> ReferenceSimulator::total_forces() const {
+  std::vector<V3> f = external_forces();
+  add_spring_forces(f);
   return f;
 }
 

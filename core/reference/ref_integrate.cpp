@@ -36,14 +36,14 @@ void ReferenceSimulator::integrate(double h, const std::vector<V3>& f) {
   const bool viscous = params_.viscosity > 0;
   switch (params_.integrator) {
     case Integrator::Approx:
-      if (params_.jacobian == Jacobian::Axial) integrate_rows<Mat3>(h, f);
-      else integrate_rows<double>(h, f);
+      advance(h, params_.jacobian == Jacobian::Axial ? solve_rows<Mat3>(h, f) : solve_rows<double>(h, f));
       break;
     case Integrator::Explicit:
-      if (viscous) integrate_rows<double>(h, f);  // the viscosity's implicit step, no stiffness term
+      if (viscous) advance(h, solve_rows<double>(h, f));  // the viscosity's implicit step, no stiffness term
       else integrate_explicit(h, f);
       break;
     case Integrator::Implicit: integrate_implicit(h, f); break;
+    case Integrator::Xpbd: integrate_xpbd(h); break;  // its own forces: springs are constraints
   }
 }
 
@@ -64,7 +64,7 @@ Block ReferenceSimulator::implicit_block(const Edge& E, double h) const {
 }
 
 template <class Block>
-void ReferenceSimulator::integrate_rows(double h, const std::vector<V3>& f) {
+std::vector<V3> ReferenceSimulator::solve_rows(double h, const std::vector<V3>& f) const {
   const size_t n = mesh_.verts.size();
   const V3 g(0, 0, -params_.gravity);
   std::vector<Block> W(mesh_.edges.size(), zero<Block>()), wsum(n, zero<Block>());
@@ -104,13 +104,15 @@ void ReferenceSimulator::integrate_rows(double h, const std::vector<V3>& f) {
     guess.swap(next);
     for (int k : scene_.pinned) guess[k].setZero();
   }
-  finish_rows(h, f, guess);
+  correct_momentum(h, f, guess);
+  return guess;
 }
+template std::vector<V3> ReferenceSimulator::solve_rows<double>(double, const std::vector<V3>&) const;
 
 // A finite number of sweeps leaves an error with a net momentum, which the exact implicit step
 // would not have (its matrix has zero row sums off the mass): remove it with a uniform velocity
-// so that sum m v' = sum m v + h sum f exactly (docs/DECISIONS.md D2). Then x' = x + h v'.
-void ReferenceSimulator::finish_rows(double h, const std::vector<V3>& f, const std::vector<V3>& vnew) {
+// so that sum m v' = sum m v + h sum f exactly (docs/DECISIONS.md D2).
+void ReferenceSimulator::correct_momentum(double h, const std::vector<V3>& f, std::vector<V3>& vnew) const {
   const size_t n = mesh_.verts.size();
   V3 drift = V3::Zero();
   double mass = 0;
@@ -122,10 +124,16 @@ void ReferenceSimulator::finish_rows(double h, const std::vector<V3>& f, const s
   }
   // (No correction with pinned vertices: the pins exert external forces.)
   const V3 correction = scene_.pinned.empty() ? V3(drift / mass) : V3::Zero();
-  for (size_t k = 0; k < n; ++k) {
+  for (size_t k = 0; k < n; ++k)
+    if (mesh_.verts[k].alive) vnew[k] -= correction;
+}
+
+// v = v', x' = x + h v'.
+void ReferenceSimulator::advance(double h, const std::vector<V3>& vnew) {
+  for (size_t k = 0; k < mesh_.verts.size(); ++k) {
     Vertex& V = mesh_.verts[k];
     if (!V.alive) continue;
-    V.v = vnew[k] - correction;
+    V.v = vnew[k];
     V.x += h * V.v;
   }
 }

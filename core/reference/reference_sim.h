@@ -52,14 +52,17 @@ class ReferenceSimulator final : public Simulator {
   std::vector<V3> vertex_normals() const;
   void add_spring_forces(std::vector<V3>& f) const;
   void add_bending_forces(const std::vector<V3>& n, std::vector<V3>& f) const;
+  std::vector<V3> external_forces() const;  ///< all but the springs: bending, gravity
   std::vector<V3> total_forces() const;
-  // ref_integrate.cpp
+  // ref_integrate.cpp, ref_xpbd.cpp
   void integrate(double h, const std::vector<V3>& f);
   template <class Block>
   Block implicit_block(const Edge& E, double h) const;
   template <class Block>
-  void integrate_rows(double h, const std::vector<V3>& f);
-  void finish_rows(double h, const std::vector<V3>& f, const std::vector<V3>& vnew);
+  std::vector<V3> solve_rows(double h, const std::vector<V3>& f) const;
+  void correct_momentum(double h, const std::vector<V3>& f, std::vector<V3>& vnew) const;
+  void advance(double h, const std::vector<V3>& vnew);
+  void integrate_xpbd(double h);
   void integrate_explicit(double h, const std::vector<V3>& f);
   void integrate_implicit(double h, const std::vector<V3>& f);
   void apply_sphere();

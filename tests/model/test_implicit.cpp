@@ -33,7 +33,8 @@ class Integrators : public EachBackend {
   /// The fast backend has neither Baraff-Witkin nor the axial Jacobian.
   bool supports(const Params& p) const {
     return GetParam() == "reference" ||
-           (p.integrator != Integrator::Implicit && !(p.integrator == Integrator::Approx && p.jacobian == Jacobian::Axial));
+           (p.integrator != Integrator::Implicit && p.integrator != Integrator::Xpbd &&
+            !(p.integrator == Integrator::Approx && p.jacobian == Jacobian::Axial));
   }
   std::vector<Vec3d> x0, v0;
   bool skip_implicit = false;  ///< Baraff-Witkin runs on the reference path only
@@ -254,6 +255,66 @@ TEST_P(Integrators, PaperStepIsSymplecticEulerWithViscosityHKappa) {
     EXPECT_LT((v3(sa.position[k]) - v3(sb.position[k])).norm(), 10 * tol()) << k;
   }
   EXPECT_GT(vmax, 1e-2);
+}
+
+// XPBD with small steps (MODEL.md §3, ref_xpbd.cpp), by hand: v += h f_ext / m, x* = x + h v,
+// one Gauss-Seidel pass over the springs in ascending id with alpha~ = 1 / (kappa_e h^2) and
+// lambda from 0, then v = (x - x_before) / h. Then momentum: sum m v' = sum m v + h sum f_ext.
+TEST_P(Integrators, XpbdProjectsEachSpringOnceInIdOrder) {
+  Params p = params(Integrator::Xpbd);
+  p.kappa = 3e4;
+  if (!supports(p)) GTEST_SKIP() << "no XPBD on this backend";
+  auto sim = make(mesh, p);
+  sim->set_state(x0, v0);
+  const Snapshot s0 = sim->snapshot();
+  sim->step();
+  const Snapshot s = sim->snapshot();
+  const double h = p.h();
+  std::vector<V3> x(x0.size()), v(x0.size());
+  V3 p0 = V3::Zero(), p1 = V3::Zero();
+  for (size_t k = 0; k < x0.size(); ++k) {
+    v[k] = v3(v0[k]) + h * V3(0, 0, -p.gravity);  // bending is off in params()
+    x[k] = v3(x0[k]) + h * v[k];
+    p0 += s0.mass[k] * (v3(v0[k]) + h * V3(0, 0, -p.gravity));
+  }
+  for (const EdgeView& e : s0.edges) {
+    const double wa = 1 / s0.mass[e.a], wb = 1 / s0.mass[e.b];
+    const double kappa_e = p.kappa * (s0.mass[e.a] + s0.mass[e.b]);  // [Eq 5]
+    const V3 d = x[e.a] - x[e.b];
+    const double dlambda = -(d.norm() - e.rest) / (wa + wb + 1 / (kappa_e * h * h));
+    x[e.a] += wa * dlambda * d.normalized();
+    x[e.b] -= wb * dlambda * d.normalized();
+  }
+  for (size_t k = 0; k < x0.size(); ++k) {
+    EXPECT_NEAR((v3(s.position[k]) - x[k]).norm(), 0, tol()) << k;
+    EXPECT_NEAR((v3(s.velocity[k]) - (x[k] - v3(x0[k])) / h).norm(), 0, tol() / h) << k;
+    p1 += s.mass[k] * v3(s.velocity[k]);
+  }
+  EXPECT_LT((p1 - p0).norm(), 1e-12);
+}
+
+// XPBD's compliance is 1 / kappa_e: as h -> 0 it converges to the same motion as symplectic
+// Euler (the springs of [Eq 5]); the gap between the two shrinks about linearly with h. A wrong
+// compliance (say 1 / kappa) converges to another stiffness and the gap stays.
+TEST_P(Integrators, XpbdConvergesToTheSpringModel) {
+  Params p = params(Integrator::Xpbd);
+  if (!supports(p)) GTEST_SKIP() << "no XPBD on this backend";
+  auto gap = [&](int substeps) {
+    Params a = params(Integrator::Explicit), b = params(Integrator::Xpbd);
+    a.frame_dt = b.frame_dt = 0.05;
+    a.substeps = b.substeps = substeps;
+    auto sa = make(mesh, a), sb = make(mesh, b);
+    sa->set_state(x0, v0);
+    sb->set_state(x0, v0);
+    for (int k = 0; k < substeps; ++k) sa->step(), sb->step();
+    double worst = 0;
+    for (size_t k = 0; k < x0.size(); ++k)
+      worst = std::max(worst, (v3(sa->snapshot().position[k]) - v3(sb->snapshot().position[k])).norm());
+    return worst;
+  };
+  const double coarse = gap(100), fine = gap(400);
+  EXPECT_GT(coarse, 1e-6);
+  EXPECT_LT(fine, coarse / 2.5) << coarse << " -> " << fine;
 }
 
 CRUMPLE_FOR_EACH_BACKEND(Integrators);
