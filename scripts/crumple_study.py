@@ -96,21 +96,24 @@ def save_result(data):
         json.dump(data, f, indent=1)
 
 
-def stage_calibrate(runner, quick):
-    sizes = [32] if quick else [64, 128]
+CALIBRATE_C = [60, 90, 120, KAPPA_H_REF, 250, 350]
+
+
+def stage_calibrate(runner, quick, sizes=None, substeps=64):
+    sizes = sizes or ([32] if quick else [32, 64])
     seeds = range(1, 3 if quick else 5)
-    cs = [60, 90, 120, KAPPA_H_REF, 250]
-    substeps = 16
-    result = {"substeps": substeps, "sizes": {}}
+    cs = CALIBRATE_C
+    result = load_result().get("calibrate", {})
+    result.setdefault("sizes", {})
     for n in sizes:
         lines = [paper(n, s) for s in seeds]
         lines += [viscous(n, s, c, substeps) for c in cs for s in seeds]
         runs = runner.run(lines)
         k = len(seeds)
-        entry = {"paper": summary(runs[:k]), "viscous": {}}
+        entry = {"paper": summary(runs[:k]), "viscous": {}, "substeps": substeps}
         for i, c in enumerate(cs):
             entry["viscous"][f"{c:g}"] = summary(runs[k * (i + 1):k * (i + 2)])
-        result["sizes"][str(n)] = entry
+        result["sizes"][f"{n}/S{substeps}"] = entry
         print_calibration(n, entry)
     return result
 
@@ -170,13 +173,76 @@ def stage_converge(runner, quick, only=None):
     return result
 
 
+ERROR_STATS = ["splits", "restores", "vertices", "radius_norm", "crease_norm", "edge_mean"]
+C = f"{DEFAULT_C:.6g}"
+# name -> (crumple options, backend, substep settings); every method but "paper" and "undamped"
+# carries the default viscosity c (D17).
+METHODS = {
+    "paper": (["--integrator", "approx"], "fast", [1]),
+    "explicit": (["--integrator", "explicit", "--viscosity", C], "fast", [1, 2, 4, 8, 16]),
+    "approx-K1": (["--integrator", "approx", "--viscosity", C], "fast", [1, 2, 4]),
+    "axial-K1": (["--integrator", "approx", "--jacobian", "axial", "--viscosity", C], "reference", [1, 2, 4, 8]),
+    "axial-K4": (["--integrator", "approx", "--jacobian", "axial", "--sweeps", 4, "--viscosity", C], "reference",
+                 [1, 2, 4]),
+    "xpbd": (["--integrator", "xpbd", "--viscosity", C], "reference", [4, 8, 16, 32]),
+    "implicit": (["--integrator", "implicit", "--cg-tolerance", "1e-4", "--viscosity", C], "reference", [1, 2, 4]),
+    "undamped": (["--integrator", "explicit"], "fast", [16]),
+}
+PARETO_CASES = {"N32_k1e4": (["--grid", 32], 1e4), "N64_k1e4": (["--grid", 64], 1e4),
+                "N128_k1e4": (["--grid", 128], 1e4)}
+
+
+def reference_level(label):
+    """The converged reference of a case: its finest substep level in the converge stage."""
+    case = load_result().get("converge", {}).get("cases", {}).get(label)
+    if not case:
+        sys.exit(f"crumple_study: no converged reference for {label}: run the converge stage first")
+    finest = max(case["levels"], key=int)
+    return int(finest), case["levels"][finest]
+
+
+def errors(summ, ref):
+    """Relative error of each statistic's seed mean against the reference's, and the largest."""
+    err = {s: abs(summ[s]["mean"] - ref[s]["mean"]) / abs(ref[s]["mean"]) for s in ERROR_STATS}
+    noise = {s: (ref[s]["sd"] or 0) / abs(ref[s]["mean"]) for s in ERROR_STATS}
+    return {"per_stat": err, "max": max(err.values()), "noise": noise}
+
+
+def stage_pareto(runner, quick, only=None):
+    seeds = range(1, 4 if quick else 9)
+    result = load_result().get("pareto", {})
+    for label, (mesh, kappa) in PARETO_CASES.items():
+        if only and label not in only:
+            continue
+        ref_s, ref = reference_level(label)
+        entry = {"reference_substeps": ref_s, "reference": ref, "methods": {}}
+        for name, (opts, backend, settings) in METHODS.items():
+            for S in settings:
+                lines = [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa, "--substeps", S]
+                         + opts + mesh for s in seeds]
+                summ = summary(runner.run(lines))
+                row = {"method": name, "backend": backend, "substeps": S, "summary": summ}
+                if not summ["failed"]:
+                    row["error"] = errors(summ, ref)
+                entry["methods"][f"{name}/S{S}"] = row
+                err = row.get("error", {}).get("max")
+                print(f"{label} {name} S={S}: failed {summ['failed']} max error "
+                      + (f"{err:.3f} " if err is not None else "- ")
+                      + " ".join(f"{k}={v:.3f}" for k, v in row.get("error", {}).get("per_stat", {}).items()),
+                      flush=True)
+        result[label] = entry
+    return result
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("stage", choices=["calibrate", "converge"])
+    p.add_argument("stage", choices=["calibrate", "converge", "pareto"])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--fresh", action="store_true")
-    p.add_argument("--cases", nargs="*", help="converge: only these cases (labels)")
+    p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels)")
+    p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
+    p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
     a = p.parse_args(argv)
     if not os.path.exists(crumple_stats.EXE):
         sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
@@ -184,8 +250,10 @@ def main(argv=None):
     data = load_result()
     if a.stage == "converge":
         data[a.stage] = stage_converge(runner, a.quick, a.cases)
+    elif a.stage == "pareto":
+        data[a.stage] = stage_pareto(runner, a.quick, a.cases)
     else:
-        data[a.stage] = stage_calibrate(runner, a.quick)
+        data[a.stage] = stage_calibrate(runner, a.quick, a.sizes, a.substeps)
     save_result(data)
 
 
