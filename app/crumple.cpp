@@ -43,6 +43,8 @@ int main(int argc, char** argv) {
            p.substeps = n;
          },
          "steps per frame, or auto: chosen each frame from the mesh's stiffest mode (default 1)");
+  run->add_option("--max-step", p.max_step, "--substeps auto: largest step in seconds (0: stability only)")
+      ->capture_default_str();
   run->add_option("--integrator", p.integrator, "approx | explicit | implicit | xpbd")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},

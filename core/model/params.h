@@ -34,6 +34,8 @@ struct Params {
   int substeps = 1;                      ///< steps per frame: h = frame_dt / substeps
   bool auto_substeps = false;            ///< substeps chosen each frame from the stiffest mode
                                          ///< of the current mesh (sim/run.h choose_substeps)
+  double max_step = 0;                   ///< auto_substeps: the step is at most this (seconds;
+                                         ///< 0: no bound but stability), the accuracy knob
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit

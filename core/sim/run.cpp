@@ -43,7 +43,11 @@ double max_stable_step(const Params& p, double mu) {
 }
 
 int choose_substeps(const Params& p, double mu) {
-  return int(std::clamp(std::ceil(p.frame_dt / max_stable_step(p, mu)), 1.0, 10000.0));
+  double h = max_stable_step(p, mu);
+  if (p.max_step > 0) h = std::min(h, p.max_step);
+  // The relative tolerance keeps frame_dt / max_step = 4 (say 1/60 and 1/240) at 4 steps
+  // despite the rounding of the two decimal inputs.
+  return int(std::clamp(std::ceil(p.frame_dt / h * (1 - 1e-12)), 1.0, 10000.0));
 }
 
 FrameStats run_frame(Simulator& sim, const Params& p, int frame) {

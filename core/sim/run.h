@@ -39,7 +39,9 @@ FrameStats run_frame(Simulator& sim, const Params& p, int frame);
 double max_stable_step(const Params& p, double mu);
 /// Room below the bound for what it leaves out (bending, springs compressed below half length).
 constexpr double kStableStepSafety = 0.95;
-/// Steps per frame for max_stable_step: ceil(frame_dt / h_max), in [1, 10000].
+/// Steps per frame: ceil(frame_dt / h), h the smaller of max_stable_step and p.max_step (when
+/// set), in [1, 10000]. With max_step = frame_dt / k for every frame rate in use, every frame
+/// rate takes the same step h and the same crumple.
 int choose_substeps(const Params& p, double mu);
 
 /// Empty if the state is sane; otherwise why it is not: a non-finite value, or a vertex that has

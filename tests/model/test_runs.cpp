@@ -118,6 +118,34 @@ bool same(const Snapshot& a, const Snapshot& b) {
          a.triangles == b.triangles;
 }
 
+// With --substeps auto and a step bound that divides every frame time in use, the frame rate no
+// longer changes the crumple: 1/30, 1/60, 1/120 and 1/240 s frames over the same 1.5 s take the
+// same steps of 1/480 s and end in the same state, bit for bit. (Without the bound, auto takes
+// the largest stable step, which differs between frame rates, and so does the crumple.)
+TEST_P(Runs, FrameRateIndependentWithAStepBound) {
+  Params p;
+  p.integrator = Integrator::Explicit;
+  p.viscosity = 1e4 / 60;
+  p.auto_substeps = true;
+  p.max_step = 1.0 / 480;
+  std::vector<Snapshot> ends;
+  for (int rate : {30, 60, 120, 240}) {
+    p.frame_dt = 1.0 / rate;
+    auto sim = make(make_grid(12), p);
+    for (int f = 1; f <= rate * 3 / 2; ++f) EXPECT_EQ(run_frame(*sim, p, f).substeps, 480 / rate);
+    ends.push_back(sim->snapshot());
+  }
+  for (size_t k = 1; k < ends.size(); ++k) EXPECT_TRUE(same(ends[0], ends[k])) << k;
+  p.max_step = 0;  // stability alone: the frame rates take different steps
+  std::vector<int> taken;
+  for (int rate : {30, 240}) {
+    p.frame_dt = 1.0 / rate;
+    auto sim = make(make_grid(12), p);
+    taken.push_back(run_frame(*sim, p, 1).substeps);
+  }
+  EXPECT_NE(taken[0], 8 * taken[1]);
+}
+
 TEST_P(Runs, SameSeedSameResultOtherSeedOther) {
   const Snapshot a = crumple(*this, GetParam(), 7, 1), b = crumple(*this, GetParam(), 7, 1);
   const Snapshot c = crumple(*this, GetParam(), 8, 1);
