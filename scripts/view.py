@@ -23,20 +23,10 @@ import time
 
 import matplotlib
 
+from accuracy_common import read_obj  # vertices, triangles, auxiliary springs of a crumple OBJ
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PAPER = (0.93, 0.90, 0.80)  # the sheet's colour, lit by its normal (test_view.py looks for it)
-
-
-def read_obj(path):
-    """Vertices and triangles of an OBJ written by crumple (v and f lines; l lines skipped)."""
-    verts, tris = [], []
-    with open(path) as f:
-        for line in f:
-            if line.startswith("v "):
-                verts.append([float(x) for x in line.split()[1:4]])
-            elif line.startswith("f "):
-                tris.append([int(x.split("/")[0]) - 1 for x in line.split()[1:4]])
-    return verts, tris
 
 
 def frame_files(folder):
@@ -73,9 +63,8 @@ class View:
         import numpy as np
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-        verts, tris = read_obj(path)
-        x = np.asarray(verts, dtype=float)
-        polys = x[np.asarray(tris, dtype=int)]
+        x, tris, _ = read_obj(path)
+        polys = x[tris]
         n = np.cross(polys[:, 1] - polys[:, 0], polys[:, 2] - polys[:, 0])
         n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-30)
         light = 0.45 + 0.55 * np.abs(n @ np.array([0.3, -0.4, 0.866]))  # both sides lit
@@ -91,7 +80,7 @@ class View:
             for k, axis in enumerate((self.ax.set_xlim, self.ax.set_ylim, self.ax.set_zlim)):
                 axis(self.limits[0][k], self.limits[1][k])
             self.ax.set_box_aspect((1, 1, 1))
-        self.ax.set_title(self.caption(frame, stats, len(verts), len(tris)))
+        self.ax.set_title(self.caption(frame, stats, len(x), len(tris)))
 
     def caption(self, frame, stats, nv, nt):
         row = stats.get(frame)
