@@ -108,8 +108,9 @@ def main():
     ap.add_argument("--every", type=int, default=5, help="live: write and show every K-th frame")
     ap.add_argument("--frame", type=int, help="screenshot: the frame to draw (default: the last)")
     ap.add_argument("--screenshot", help="draw one frame, save the window as this PNG, exit")
-    ap.add_argument("run_args", nargs="*", help="live: options for `crumple run`")
-    a = ap.parse_args()
+    argv = sys.argv[1:]
+    run_args = argv[argv.index("--") + 1:] if "--" in argv else []
+    a = ap.parse_args(argv[:argv.index("--")] if "--" in argv else argv)
     matplotlib.use("TkAgg")  # a window: needs a display (Xvfb in the test)
     import matplotlib.pyplot as plt
 
@@ -118,7 +119,7 @@ def main():
         os.makedirs(a.folder, exist_ok=True)
         for old in frame_files(a.folder).values():
             os.remove(old)
-        run = start_run(a.folder, a.every, a.run_args)
+        run = start_run(a.folder, a.every, run_args)
     view = View(plt)
     if a.screenshot:
         frames = frame_files(a.folder)
