@@ -1,7 +1,6 @@
 # `cmake --install <build> --prefix P`: the library, its public headers under P/include/crumple,
 # the CMake package (find_package(crumple) -> crumple::crumple) and crumple.pc. The command
 # installs itself (app/CMakeLists.txt).
-include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 install(TARGETS crumple_lib EXPORT crumpleTargets
