@@ -70,6 +70,23 @@ TEST(ApiErrors, OneLineWithTheCommandsText) {
   EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 0);
 }
 
+// Catches an instability reported with other words or at another frame than the command's,
+// or not reported (then a renderer would draw NaNs), and steps taken after it.
+TEST(ApiErrors, UnstableLikeTheCommandAndThenRefused) {
+  SheetDesc d = small_grid("reference", 10);
+  d.params = Params{};  // the command's defaults
+  d.params.scene = Scene::Free;
+  d.params.integrator = Integrator::Explicit;
+  d.params.kappa = 1e6;
+  Sheet s = Sheet::create(d);
+  std::string error;
+  for (int f = 0; f < 200 && error.empty(); ++f) error = s.try_step(d.params.frame_dt);
+  EXPECT_EQ(error, command_error("run --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200"));
+  const std::uint64_t steps = s.steps();
+  EXPECT_EQ(s.try_step(d.params.frame_dt), error);
+  EXPECT_EQ(s.steps(), steps);
+}
+
 // Catches a check made after the sheet has moved (a half-done step), or an unchecked bad id.
 TEST_P(Api, BadManipulatorRefusedBeforeAnyStep) {
   Sheet s = Sheet::create(small_grid(GetParam()));
