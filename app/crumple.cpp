@@ -40,6 +40,8 @@ int main(int argc, char** argv) {
   run->add_option("--sweeps", p.sweeps, "K, Jacobi sweeps of the approximate implicit method")->capture_default_str();
   run->add_option("--predictor", p.predictor, "approx: bounded | explicit (the paper's, unstable when stiff)")
       ->transform(choice<Predictor>({{"bounded", Predictor::Bounded}, {"explicit", Predictor::Explicit}}));
+  run->add_option("--jacobian", p.jacobian, "approx: isotropic (the paper's) | axial (kappa_e u u^T)")
+      ->transform(choice<Jacobian>({{"isotropic", Jacobian::Isotropic}, {"axial", Jacobian::Axial}}));
   run->add_option("--cg-tolerance", p.cg_tolerance, "implicit: CG relative tolerance")->capture_default_str();
   run->add_option("--backend", o.backend, "backend")->check(CLI::IsMember(backend_names()))->capture_default_str();
   run->add_option("--threads", o.threads, "worker threads")->capture_default_str();
@@ -47,6 +49,8 @@ int main(int argc, char** argv) {
   run->add_option("--kappa", p.kappa, "stiffness per unit mass [Eq 5]")->capture_default_str();
   run->add_option("--bend", p.bend, "bending coefficient per unit mass [Eq 9]")->capture_default_str();
   run->add_option("--damping", p.damping, "spring damping per unit mass")->capture_default_str();
+  run->add_option("--viscosity", p.viscosity, "implicit viscosity between neighbours per unit mass")
+      ->capture_default_str();
   run->add_option("--phi", p.phi, "curvature sensitivity of fracture [Eq 6]")->capture_default_str();
   run->add_option("--psi", p.psi, "new-vertex offset scale [Eq 7]")->capture_default_str();
   run->add_option("--epsilon", p.epsilon, "restoration threshold [Eq 10]")->capture_default_str();

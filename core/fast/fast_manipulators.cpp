@@ -51,7 +51,7 @@ int FastSimulator::live_slot(int id) const {
 }
 
 // The force joins f (what explicit_velocity and the sweeps read) and the first guess g, which
-// gather_forces made linear in f: h F / (m + 2 h^2 sum kappa) for the bounded predictor,
+// gather_forces made linear in f: h F / (m + 2 sum W_e) for the bounded predictor,
 // h F / m for the explicit one (DECISIONS.md D1), as the reference's predictor has it.
 void FastSimulator::add_grab_forces() {
   Vertices& V = topo_.V;
@@ -59,10 +59,10 @@ void FastSimulator::add_grab_forces() {
   for (const Grab& g : manip_.grabs) {
     const int v = live_slot(g.vertex);
     if (v < 0) continue;
-    const double m = V.m[v], row = m + h * h * double(V.ksum[v]);  // ksum: from gather_forces
+    const double m = V.m[v], row = m + double(V.ksum[v]);  // ksum: sum of W_e, from gather_forces
     const std::array<double, 3> F = grab_force(g, {V.x[v], V.y[v], V.z[v]}, {V.vx[v], V.vy[v], V.vz[v]}, row, h);
     V.fx[v] += float(F[0]), V.fy[v] += float(F[1]), V.fz[v] += float(F[2]);
-    const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * h * h * V.ksum[v]) : h / m;
+    const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * double(V.ksum[v])) : h / m;
     V.g[v].x += float(gain * F[0]), V.g[v].y += float(gain * F[1]), V.g[v].z += float(gain * F[2]);
   }
 }

@@ -25,6 +25,8 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
     : params_(params), scene_(make_scene(input, params)), par_(threads) {
   if (params_.integrator == Integrator::Implicit)
     throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
+  if (params_.integrator == Integrator::Approx && params_.jacobian == Jacobian::Axial)
+    throw std::invalid_argument("the fast backend has no axial Jacobian yet; use --backend reference");
   const int nv = int(input.positions.size());
   const std::size_t nt = input.triangles.size();
   // Refinement grows a mesh about 4x at the default floor: room for that up front.
@@ -63,6 +65,8 @@ StepConstants FastSimulator::step_constants() const {
   c.h = float(params_.h());
   c.h2 = c.h * c.h;
   c.kappa = float(params_.kappa);
+  const double h = params_.h(), stiff = params_.integrator == Integrator::Approx ? h * h * params_.kappa : 0.0;
+  c.implicit = float(stiff + h * params_.viscosity);
   c.bend = float(params_.bend);
   c.damping = float(params_.damping);
   c.gravity = float(params_.gravity);
@@ -94,7 +98,7 @@ void FastSimulator::integrate() {
   auto pin = [&] {  // pinned vertices (hang scene) are fixed neighbours in every sweep
     for (int k : scene_.pinned) topo_.V.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
   };
-  if (params_.integrator == Integrator::Explicit) {
+  if (params_.integrator == Integrator::Explicit && params_.viscosity == 0) {
     par_.run_lanes(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
     pin();
   } else {

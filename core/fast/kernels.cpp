@@ -116,7 +116,7 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::i
     const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
     const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
     const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum * inv;
-    const float kap = c.kappa * msum;
+    const float kap = c.implicit * msum;  // W_e = h^2 kappa_e + h c_e (D17)
     // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
     const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
     const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
@@ -144,7 +144,7 @@ void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
 
 namespace {
 // The gather sums whole EdgeOut records as rows of 16 floats, each scaled lane by lane by the
-// role the vertex plays: a row of (f, kappa_e, j, -kb, mean) for endpoint a, the force and j
+// role the vertex plays: a row of (f, W_e, j, -kb, mean) for endpoint a, the force and j
 // negated for endpoint b (b receives the opposite of a), and only (kb, mean) as a wing. Scaling
 // by 1, -1 or 0 is exact, so each lane sums exactly what the per-field sums did.
 using Row = Wide<16>;
@@ -175,7 +175,7 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     const std::int32_t* wings = &V.wings[std::size_t(v) * st];  // v is a wing of the edge opposite it
     for_list(wings, nt, [&](int x, bool in) { sum += Row::load(in ? &out[x] : &kZeroRow) * kAsWing; });
     float fx = sum[0], fy = sum[1], fz = sum[2];
-    const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of kappa_e (v_other - v_v)
+    const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of W_e (v_other - v_v)
     const float kn = sum[7], mx = sum[8], my = sum[9], mz = sum[10];  // f = -k n_v (hinge), +k n_v (wing), - mean
     const float mass = V.m[v];
     fx += kn * V.nx[v] - mx;
@@ -188,9 +188,9 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     const float dead = mass > 0 ? 0.0f : 1.0f;
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
-      const float inv = 1.0f / (mass + 2.0f * c.h2 * ks + dead);
-      V.g[v] = Float4{V.vx[v] + (c.h * fx + c.h2 * jx) * inv, V.vy[v] + (c.h * fy + c.h2 * jy) * inv,
-                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + c.h2 * jz) * inv, mass};
+      const float inv = 1.0f / (mass + 2.0f * ks + dead);
+      V.g[v] = Float4{V.vx[v] + (c.h * fx + jx) * inv, V.vy[v] + (c.h * fy + jy) * inv,
+                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + jz) * inv, mass};
     } else {
       const float inv = c.h / (mass + dead);
       V.g[v] = Float4{V.vx[v] + fx * inv, V.vy[v] + fy * inv, V.vz[v] + fz * inv, mass};
@@ -209,17 +209,17 @@ void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
     const int n = V.n_springs[v];
     auto add = [&](const Float4* p) {
       const Row4 o = Row4::load(p);
-      sum += (c.kappa * (mass + o[3])) * o;  // kappa_e [Eq 5] (the neighbour's mass in w) times its guess
+      sum += (c.implicit * (mass + o[3])) * o;  // W_e (the neighbour's mass in w) times its guess
     };
     // for_list's loops, written out: through for_list GCC contracts this multiply-add into FMAs
     // differently, which changes the rounding of every run (state hashes differ from 15d8759).
     for (int k = 0; k < kFixed; ++k) add(k < n ? &g[nbrs[k]] : &kZero4);
     for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
     const float sx = sum[0], sy = sum[1], sz = sum[2];
-    const float inv = 1.0f / (mass + c.h2 * V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
-    V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + c.h2 * sx) * inv,
-                         (mass * V.vy[v] + c.h * V.fy[v] + c.h2 * sy) * inv,
-                         (mass * V.vz[v] + c.h * V.fz[v] + c.h2 * sz) * inv, mass};
+    const float inv = 1.0f / (mass + V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
+    V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + sx) * inv,
+                         (mass * V.vy[v] + c.h * V.fy[v] + sy) * inv,
+                         (mass * V.vz[v] + c.h * V.fz[v] + sz) * inv, mass};
   }
 }
 

@@ -16,6 +16,8 @@ namespace crumple::fast {
 struct StepConstants {
   float h = 0, h2 = 0;       ///< time step and its square
   float kappa = 0;           ///< stiffness per unit mass [Eq 5]
+  float implicit = 0;        ///< w per unit mass: W_e = w (m_a + m_b) I is a spring's block of the
+                             ///< implicit velocity step, w = h^2 kappa (approx) + h c (viscosity, D17)
   float bend = 0;            ///< bending coefficient per unit mass [Eq 9]
   float damping = 0;         ///< spring-axis damping per unit mass
   float gravity = 0;         ///< acceleration along -z
@@ -27,13 +29,14 @@ struct StepConstants {
 void triangle_areas(Topology& m, int begin, int end);
 /// n_v = normalized sum of the area vectors of v's triangles.                         §1
 void vertex_normals(Topology& m, int begin, int end);
-/// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping) and the
-/// bending magnitude s C_beta B and balanced mean of its stencil [Eq 8-9].
+/// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping), the implicit
+/// block W_e and W_e (v_b - v_a), and the bending magnitude s C_beta B and balanced mean of its
+/// stencil [Eq 8-9].
 void edge_forces(Topology& m, const StepConstants& c, int begin, int end);
-/// Per vertex: gathers f_v, sum kappa, and writes the first Jacobi guess (the predictor, §3)
+/// Per vertex: gathers f_v, sum W_e, and writes the first Jacobi guess (the predictor, §3)
 /// with m_v in w.
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
-/// One Jacobi sweep of the approximate implicit system: reads g, writes g_next.             §3
+/// One Jacobi sweep of the implicit velocity step (approx, viscosity): reads g, writes g_next. §3
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);
 /// Symplectic Euler's new velocity into g: v + h f / m.                               §3
 void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end);

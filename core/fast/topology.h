@@ -63,8 +63,8 @@ struct alignas(16) Float4 {
 /// 64 bytes: GCC vectorizes the edge pass's interleaved stores for 16 floats (not for 12).
 struct alignas(64) EdgeOut {
   float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
-  float kap = 0;                 ///< kappa_e [Eq 5]
-  float jx = 0, jy = 0, jz = 0;  ///< kappa_e (v_b - v_a): the edge's part of (df/dx) v
+  float kap = 0;                 ///< W_e per unit I: h^2 kappa_e [Eq 5] + h c_e (D17)
+  float jx = 0, jy = 0, jz = 0;  ///< W_e (v_b - v_a)
   float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
   float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
   float pad[5] = {};             ///< to 64 bytes
@@ -77,7 +77,7 @@ struct Vertices {
   Array<float> m;            ///< mass m_k (0: dead)
   Array<float> nx, ny, nz;   ///< vertex normal n_k (MODEL.md §1)
   Array<float> fx, fy, fz;   ///< total force f_k of this step
-  Array<float> ksum;         ///< sum of kappa_e over the vertex's springs
+  Array<float> ksum;         ///< sum of W_e over the vertex's springs
   Array<Float4> g;           ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
                              ///< what a sweep gathers from each neighbour, in one load
   Array<Float4> g_next;      ///< the next sweep's guess (double buffer)

@@ -27,7 +27,8 @@ std::string Params::validate() const {
       {"sweeps", double(sweeps), 1, 1000},   {"cg-tolerance", cg_tolerance, 1e-15, 0.5},
       {"cg-max-iterations", double(cg_max_iterations), 1, 1e6},
       {"kappa", kappa, 0.0, 1e12},           {"bend", bend, 0.0, 1e12},
-      {"damping", damping, 0.0, 1e9},        {"phi", phi, 0.0, 1.0},
+      {"damping", damping, 0.0, 1e9},        {"viscosity", viscosity, 0.0, 1e9},
+      {"phi", phi, 0.0, 1.0},
       {"psi", psi, 0.0, 1.0},                {"epsilon", epsilon, 0.0, 1.0},
       {"varphi", varphi, 1.0, 100.0},        {"floor", floor, 0.0, 1.0},
   };
@@ -44,6 +45,7 @@ const char* to_string(Integrator i) {
 }
 const char* to_string(RestoreForm r) { return r == RestoreForm::Exact ? "exact" : "paper"; }
 const char* to_string(Predictor p) { return p == Predictor::Bounded ? "bounded" : "explicit"; }
+const char* to_string(Jacobian j) { return j == Jacobian::Isotropic ? "isotropic" : "axial"; }
 const char* to_string(BendingForm b) { return b == BendingForm::Balanced ? "balanced" : "paper"; }
 
 }  // namespace crumple

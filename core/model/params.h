@@ -13,6 +13,9 @@ enum class RestoreForm { Exact, Paper };            ///< MODEL.md §7
 enum class BendingForm { Balanced, Paper };         ///< MODEL.md §6
 /// Where the approximate implicit method's Jacobi sweeps start (docs/DECISIONS.md, D1).
 enum class Predictor { Bounded, Explicit };
+/// The spring Jacobian of the approximate implicit method (MODEL.md §3): kappa_e I (the paper's)
+/// or kappa_e u u^T (stiff along the spring only, so it damps stretching, not folding).
+enum class Jacobian { Isotropic, Axial };
 
 struct Params {
   // --- scene (MODEL.md §8) ---
@@ -32,6 +35,7 @@ struct Params {
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit
+  Jacobian jacobian = Jacobian::Isotropic;   ///< approx: the spring Jacobian of its implicit term
   double cg_tolerance = 1e-6;            ///< Baraff-Witkin: relative CG residual
   int cg_max_iterations = 1000;          ///< Baraff-Witkin: CG iteration cap
 
@@ -39,6 +43,8 @@ struct Params {
   double kappa = 1.0e4;     ///< stiffness per unit mass: kappa_e = kappa (m_i + m_j)   [Eq 5]
   double bend = 30.0;       ///< C_beta per unit mass: C_beta,e = bend (m_i + m_j)      [Eq 9]
   double damping = 0.0;     ///< k_d per unit mass, spring-axis damping (optional)
+  double viscosity = 0.0;   ///< c per unit mass: c_e = c (m_i + m_j), force c_e (v_j - v_i) on i
+                            ///< from each spring, applied implicitly (docs/DECISIONS.md D17)
   BendingForm bending = BendingForm::Balanced;
 
   // --- adaptive mesh (MODEL.md §4, §5, §7) ---
@@ -65,5 +71,6 @@ const char* to_string(Integrator);
 const char* to_string(RestoreForm);
 const char* to_string(BendingForm);
 const char* to_string(Predictor);
+const char* to_string(Jacobian);
 
 }  // namespace crumple

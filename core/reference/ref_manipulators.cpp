@@ -17,8 +17,12 @@ void ReferenceSimulator::add_grab_forces(std::vector<V3>& f) const {
   for (const Grab& g : manip_.grabs) {
     if (g.vertex < 0 || g.vertex >= int(mesh_.verts.size()) || !mesh_.verts[g.vertex].alive) continue;
     const Vertex& V = mesh_.verts[g.vertex];
-    double row = V.m;
-    for (int e : V.edges) row += h * h * mesh_.edges[e].kappa;
+    double row = V.m;  // M: the scalar W_e of ref_integrate.cpp's implicit_block, summed
+    for (int e : V.edges) {
+      const Edge& E = mesh_.edges[e];
+      const double stiff = params_.integrator == Integrator::Approx ? h * h * E.kappa : 0.0;
+      row += stiff + h * params_.viscosity * (mesh_.verts[E.a].m + mesh_.verts[E.b].m);
+    }
     f[g.vertex] += to_v3(grab_force(g, {V.x.x(), V.x.y(), V.x.z()}, {V.v.x(), V.v.y(), V.v.z()}, row, h));
   }
 }

@@ -55,7 +55,11 @@ class ReferenceSimulator final : public Simulator {
   std::vector<V3> total_forces() const;
   // ref_integrate.cpp
   void integrate(double h, const std::vector<V3>& f);
-  void integrate_approx(double h, const std::vector<V3>& f);
+  template <class Block>
+  Block implicit_block(const Edge& E, double h) const;
+  template <class Block>
+  void integrate_rows(double h, const std::vector<V3>& f);
+  void finish_rows(double h, const std::vector<V3>& f, const std::vector<V3>& vnew);
   void integrate_explicit(double h, const std::vector<V3>& f);
   void integrate_implicit(double h, const std::vector<V3>& f);
   void apply_sphere();

@@ -41,8 +41,10 @@ struct Pin {
 /// Its force is the backward-Euler force of a zero-length spring of stiffness k on that vertex's
 /// row of the approximate implicit system (MODEL.md §3) with its neighbours held, evaluated on
 /// the state at the start of the step (x, v, time step h):
-///     F = k (target - x - h v) / (1 + h^2 k / M),   M = m + h^2 sum_e kappa_e
-/// (m the vertex's mass, kappa_e [Eq 5] over its springs, mesh and auxiliary). It is stable
+///     F = k (target - x - h v) / (1 + h^2 k / M),   M = m + sum_e w_e
+/// (m the vertex's mass; over its springs, mesh and auxiliary, w_e = h^2 kappa_e [Eq 5] + h c_e,
+/// the scalar block of the implicit velocity step, DECISIONS.md D17, whose h^2 kappa_e term only
+/// the approximate implicit method has). It is stable
 /// for any k; as k grows the vertex is moved to the target within one step and the sheet
 /// follows through its springs. The h v term damps the motion relative to the target.
 struct Grab {

@@ -97,32 +97,36 @@ TEST_P(Manip, SphereKeepsEveryVertexOutside) {
 
 // Catches a grab force with a wrong sign, stiffness, damping or row term, or applied to
 // another vertex: the test hook's total force with the grab minus the one without must be
-// F = k (p - x - h v) / (1 + h^2 k / M), M = m + h^2 sum kappa_e (sim/manipulators.h), on the
-// grabbed vertex, and zero elsewhere. kappa_e = kappa (m_a + m_b) [Eq 5] from the snapshot.
+// F = k (p - x - h v) / (1 + h^2 k / M), M = m + sum_e (h^2 kappa_e + h c_e) (sim/manipulators.h)
+// on the grabbed vertex, and zero elsewhere; kappa_e [Eq 5] and c_e (D17) from the snapshot's
+// masses. Without and with viscosity (the row's h c_e term).
 TEST_P(Manip, GrabForceIsItsDefinition) {
-  Params p = embedding_params();
-  auto sim = make_simulator(GetParam(), make_grid(12), p, 1);
-  for (int k = 0; k < 5; ++k) sim->step();  // some velocity
-  const Snapshot s = sim->snapshot();
-  const int v = 7;
-  const Grab g{v, {0.3, 1.2, 0.4}, 2.0};
-  const std::vector<Vec3d> f0 = sim->forces();
-  Manipulators m;
-  m.grabs.push_back(g);
-  sim->set_manipulators(m);
-  const std::vector<Vec3d> f1 = sim->forces();
-  const double h = p.h(), k = g.stiffness;
-  double row = s.mass[v];
-  for (const EdgeView& e : s.edges)
-    if (e.a == v || e.b == v) row += h * h * p.kappa * (s.mass[e.a] + s.mass[e.b]);
-  ASSERT_GT(row, 2 * s.mass[v]) << "the springs' part of the row is what the test is about";
-  for (std::size_t u = 0; u < f0.size(); ++u) {
-    for (int d = 0; d < 3; ++d) {
-      const double want = u == std::size_t(v)
-          ? k * (g.target[d] - s.position[v][d] - h * s.velocity[v][d]) / (1 + h * h * k / row) : 0.0;
-      const double scale = std::abs(f0[u][d]) + std::abs(want);
-      EXPECT_NEAR(f1[u][d] - f0[u][d], want, (GetParam() == "fast" ? 1e-6 : 1e-12) * scale + 1e-15)
-          << "vertex " << u << " axis " << d;
+  for (double viscosity : {0.0, 20.0}) {
+    Params p = embedding_params();
+    p.viscosity = viscosity;
+    auto sim = make_simulator(GetParam(), make_grid(12), p, 1);
+    for (int k = 0; k < 5; ++k) sim->step();  // some velocity
+    const Snapshot s = sim->snapshot();
+    const int v = 7;
+    const Grab g{v, {0.3, 1.2, 0.4}, 2.0};
+    const std::vector<Vec3d> f0 = sim->forces();
+    Manipulators m;
+    m.grabs.push_back(g);
+    sim->set_manipulators(m);
+    const std::vector<Vec3d> f1 = sim->forces();
+    const double h = p.h(), k = g.stiffness;
+    double row = s.mass[v];
+    for (const EdgeView& e : s.edges)
+      if (e.a == v || e.b == v) row += (h * h * p.kappa + h * p.viscosity) * (s.mass[e.a] + s.mass[e.b]);
+    ASSERT_GT(row, 2 * s.mass[v]) << "the springs' part of the row is what the test is about";
+    for (std::size_t u = 0; u < f0.size(); ++u) {
+      for (int d = 0; d < 3; ++d) {
+        const double want = u == std::size_t(v)
+            ? k * (g.target[d] - s.position[v][d] - h * s.velocity[v][d]) / (1 + h * h * k / row) : 0.0;
+        const double scale = std::abs(f0[u][d]) + std::abs(want);
+        EXPECT_NEAR(f1[u][d] - f0[u][d], want, (GetParam() == "fast" ? 1e-6 : 1e-12) * scale + 1e-15)
+            << "viscosity " << viscosity << " vertex " << u << " axis " << d;
+      }
     }
   }
 }

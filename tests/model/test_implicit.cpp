@@ -30,6 +30,11 @@ class Integrators : public EachBackend {
     return p;
   }
   InputMesh mesh;
+  /// The fast backend has neither Baraff-Witkin nor the axial Jacobian.
+  bool supports(const Params& p) const {
+    return GetParam() == "reference" ||
+           (p.integrator != Integrator::Implicit && !(p.integrator == Integrator::Approx && p.jacobian == Jacobian::Axial));
+  }
   std::vector<Vec3d> x0, v0;
   bool skip_implicit = false;  ///< Baraff-Witkin runs on the reference path only
 };
@@ -50,99 +55,205 @@ TEST_P(Integrators, SymplecticEuler) {
   }
 }
 
-// K = 1: v_i' = (m_i v_i + h f_i + h^2 sum_j kappa_e v*_j) / (m_i + h^2 sum kappa_e), with the
-// guess v*_j = v_j + h f_j / m_j (the paper's explicit predictor) or the bounded predictor
-// v_j + h g + (h (f_j - m_j g) + h^2 sum_k kappa (v_k - v_j)) / (m_j + 2 h^2 sum kappa).
-TEST_P(Integrators, ApproximateImplicitOneSweep) {
-  for (Predictor pred : {Predictor::Explicit, Predictor::Bounded}) {
-    Params p = params(Integrator::Approx);
-    p.predictor = pred;
+// K = 1 sweeps of the implicit velocity step (MODEL.md §3, D17), computed here by hand with a
+// 3 x 3 block per spring, W_e = h^2 kappa_e J_e + h c_e I (J_e = I isotropic, u u^T axial, 0 for
+// explicit Euler with viscosity):
+//   v_i' = (m_i I + sum W_e)^-1 (m_i v_i + h f_i + sum W_e v*_j),
+// with the guess v*_j = v_j + h f_j / m_j (the paper's explicit predictor) or the bounded predictor
+// v_j + h g + (m_j I + 2 sum W)^-1 (h (f_j - m_j g) + sum W (v_k - v_j)), then the uniform
+// correction that restores sum m v' = sum m v + h sum f (DECISIONS.md D2).
+struct SweepCase {
+  Integrator integrator;
+  Jacobian jacobian;
+  Predictor predictor;
+  double viscosity;
+};
+
+std::vector<V3> one_sweep(const Params& p, const Snapshot& s0, const std::vector<Vec3d>& f) {
+  using M3 = Eigen::Matrix3d;
+  const double h = p.h();
+  const size_t n = s0.mass.size();
+  const V3 g(0, 0, -p.gravity);
+  auto block = [&](const EdgeView& e) {
+    const double msum = s0.mass[e.a] + s0.mass[e.b];
+    const V3 u = (v3(s0.position[e.a]) - v3(s0.position[e.b])).normalized();
+    const M3 J = p.integrator == Integrator::Explicit ? M3::Zero()
+                 : p.jacobian == Jacobian::Axial      ? M3(u * u.transpose())
+                                                      : M3::Identity();
+    return M3(h * h * p.kappa * msum * J + h * p.viscosity * msum * M3::Identity());  // [Eq 5], D17
+  };
+  std::vector<M3> wsum(n, M3::Zero());
+  std::vector<V3> jv(n, V3::Zero()), num(n);
+  for (const EdgeView& e : s0.edges) {
+    const M3 W = block(e);
+    wsum[e.a] += W;
+    wsum[e.b] += W;
+    jv[e.a] += W * (v3(s0.velocity[e.b]) - v3(s0.velocity[e.a]));
+    jv[e.b] += W * (v3(s0.velocity[e.a]) - v3(s0.velocity[e.b]));
+  }
+  auto guess = [&](int j) {
+    const double m = s0.mass[j];
+    if (p.predictor == Predictor::Explicit) return V3(v3(s0.velocity[j]) + h * v3(f[j]) / m);
+    const M3 D = m * M3::Identity() + 2 * wsum[j];
+    return V3(v3(s0.velocity[j]) + h * g + D.inverse() * (h * (v3(f[j]) - m * g) + jv[j]));
+  };
+  for (size_t k = 0; k < n; ++k) num[k] = s0.mass[k] * v3(s0.velocity[k]) + h * v3(f[k]);
+  for (const EdgeView& e : s0.edges) {
+    num[e.a] += block(e) * guess(e.b);
+    num[e.b] += block(e) * guess(e.a);
+  }
+  std::vector<V3> vnew(n);
+  V3 drift = V3::Zero();
+  double mass = 0;
+  for (size_t k = 0; k < n; ++k) {
+    vnew[k] = (s0.mass[k] * M3::Identity() + wsum[k]).inverse() * num[k];
+    drift += s0.mass[k] * (vnew[k] - v3(s0.velocity[k])) - h * v3(f[k]);
+    mass += s0.mass[k];
+  }
+  for (V3& v : vnew) v -= drift / mass;
+  return vnew;
+}
+
+TEST_P(Integrators, OneSweepOfTheImplicitVelocityStep) {
+  const SweepCase cases[] = {
+      {Integrator::Approx, Jacobian::Isotropic, Predictor::Explicit, 0},
+      {Integrator::Approx, Jacobian::Isotropic, Predictor::Bounded, 0},
+      {Integrator::Approx, Jacobian::Isotropic, Predictor::Bounded, 7},
+      {Integrator::Approx, Jacobian::Axial, Predictor::Bounded, 0},
+      {Integrator::Approx, Jacobian::Axial, Predictor::Bounded, 7},
+      {Integrator::Explicit, Jacobian::Isotropic, Predictor::Bounded, 7},
+  };
+  for (const SweepCase& c : cases) {
+    Params p = params(c.integrator);
+    p.jacobian = c.jacobian;
+    p.predictor = c.predictor;
+    p.viscosity = c.viscosity;
+    const std::string label = std::string(to_string(c.integrator)) + " " + to_string(c.jacobian) + " " +
+                              to_string(c.predictor) + " c=" + std::to_string(c.viscosity);
+    if (!supports(p)) continue;
     auto sim = make(mesh, p);
     sim->set_state(x0, v0);
     const auto f = sim->forces();
     const Snapshot s0 = sim->snapshot();
     sim->step();
-    const auto s = sim->snapshot();
-    const double h = p.h(), h2 = h * h;
-    const size_t n = x0.size();
-    const V3 g(0, 0, -p.gravity);
-    std::vector<double> ksum(n, 0.0);
-    std::vector<V3> jv(n, V3::Zero());
-    for (const EdgeView& e : s0.edges) {
-      const double kap = p.kappa * (s0.mass[e.a] + s0.mass[e.b]);  // [Eq 5]
-      ksum[e.a] += kap;
-      ksum[e.b] += kap;
-      jv[e.a] += kap * (v3(v0[e.b]) - v3(v0[e.a]));
-      jv[e.b] += kap * (v3(v0[e.a]) - v3(v0[e.b]));
-    }
-    auto guess = [&](int j) {
-      const double m = s0.mass[j];
-      if (pred == Predictor::Explicit) return V3(v3(v0[j]) + h * v3(f[j]) / m);
-      return V3(v3(v0[j]) + h * g + (h * (v3(f[j]) - m * g) + h2 * jv[j]) / (m + 2 * h2 * ksum[j]));
-    };
-    std::vector<V3> num(n);
-    for (size_t k = 0; k < n; ++k) num[k] = s0.mass[k] * v3(v0[k]) + h * v3(f[k]);
-    for (const EdgeView& e : s0.edges) {
-      const double kap = p.kappa * (s0.mass[e.a] + s0.mass[e.b]);
-      num[e.a] += h2 * kap * guess(e.b);
-      num[e.b] += h2 * kap * guess(e.a);
-    }
-    // Then the uniform correction that restores sum m v' = sum m v + h sum f (DECISIONS.md D2).
-    std::vector<V3> vnew(n);
-    V3 drift = V3::Zero();
-    double mass = 0;
-    for (size_t k = 0; k < n; ++k) {
-      vnew[k] = num[k] / (s0.mass[k] + h2 * ksum[k]);
-      drift += s0.mass[k] * (vnew[k] - v3(v0[k])) - h * v3(f[k]);
-      mass += s0.mass[k];
-    }
-    for (size_t k = 0; k < n; ++k) {
-      const V3 v = vnew[k] - drift / mass;
-      EXPECT_NEAR((v3(s.velocity[k]) - v).norm(), 0, tol() * 100) << k << " " << to_string(pred);
-      EXPECT_NEAR((v3(s.position[k]) - (v3(x0[k]) + h * v)).norm(), 0, tol() * 10) << k;
+    const Snapshot s = sim->snapshot();
+    const std::vector<V3> v = one_sweep(p, s0, f);
+    for (size_t k = 0; k < x0.size(); ++k) {
+      EXPECT_NEAR((v3(s.velocity[k]) - v[k]).norm(), 0, tol() * 100) << k << " " << label;
+      EXPECT_NEAR((v3(s.position[k]) - (v3(x0[k]) + p.h() * v[k])).norm(), 0, tol() * 10) << k << " " << label;
     }
   }
 }
 
-// Baraff-Witkin: (M - h^2 J) dv = h (f + h J v) with J = df/dx from finite differences.
+// Baraff-Witkin: (M - h^2 J - h D) dv = h (f + f_visc + h J v) with J = df/dx from finite
+// differences of the force hook, and the viscosity (D17, not in the hook) by hand: f_visc,i =
+// sum_e c_e (v_j - v_i), D its (constant) velocity Jacobian.
 TEST_P(Integrators, BaraffWitkinSolvesTheLinearSystem) {
   if (skip_implicit) GTEST_SKIP() << "the fast backend has no Baraff-Witkin integrator";
-  const Params p = params(Integrator::Implicit);
-  auto sim = make(mesh, p);
-  const size_t n = x0.size();
-  const double h = p.h(), delta = 1e-6;
-  Eigen::MatrixXd J(3 * n, 3 * n);
-  for (size_t k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) {
-      auto xp = x0, xm = x0;
-      xp[k][d] += delta;
-      xm[k][d] -= delta;
-      sim->set_state(xp, v0);
-      const auto fp = sim->forces();
-      sim->set_state(xm, v0);
-      const auto fm = sim->forces();
-      for (size_t r = 0; r < n; ++r)
-        for (int c = 0; c < 3; ++c) J(3 * r + c, 3 * k + d) = (fp[r][c] - fm[r][c]) / (2 * delta);
+  for (double viscosity : {0.0, 4.0}) {
+    Params p = params(Integrator::Implicit);
+    p.viscosity = viscosity;
+    auto sim = make(mesh, p);
+    const size_t n = x0.size();
+    const double h = p.h(), delta = 1e-6;
+    Eigen::MatrixXd J(3 * n, 3 * n), D = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+    for (size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d) {
+        auto xp = x0, xm = x0;
+        xp[k][d] += delta;
+        xm[k][d] -= delta;
+        sim->set_state(xp, v0);
+        const auto fp = sim->forces();
+        sim->set_state(xm, v0);
+        const auto fm = sim->forces();
+        for (size_t r = 0; r < n; ++r)
+          for (int c = 0; c < 3; ++c) J(3 * r + c, 3 * k + d) = (fp[r][c] - fm[r][c]) / (2 * delta);
+      }
+    sim->set_state(x0, v0);
+    const auto f = sim->forces();
+    const Snapshot s0 = sim->snapshot();
+    Eigen::VectorXd F(3 * n), V(3 * n), M(3 * n);
+    for (size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d) {
+        F(3 * k + d) = f[k][d];
+        V(3 * k + d) = v0[k][d];
+        M(3 * k + d) = s0.mass[k];
+      }
+    for (const EdgeView& e : s0.edges) {
+      const double ce = viscosity * (s0.mass[e.a] + s0.mass[e.b]);
+      for (int d = 0; d < 3; ++d) {
+        const int a = 3 * e.a + d, b = 3 * e.b + d;
+        F(a) += ce * (v0[e.b][d] - v0[e.a][d]);
+        F(b) += ce * (v0[e.a][d] - v0[e.b][d]);
+        D(a, a) -= ce, D(b, b) -= ce, D(a, b) += ce, D(b, a) += ce;
+      }
     }
-  sim->set_state(x0, v0);
-  const auto f = sim->forces();
-  const auto m = sim->snapshot().mass;
-  Eigen::VectorXd F(3 * n), V(3 * n), M(3 * n);
-  for (size_t k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) {
-      F(3 * k + d) = f[k][d];
-      V(3 * k + d) = v0[k][d];
-      M(3 * k + d) = m[k];
+    sim->step();
+    const auto s = sim->snapshot();
+    Eigen::VectorXd dv(3 * n);
+    for (size_t k = 0; k < n; ++k)
+      for (int d = 0; d < 3; ++d) dv(3 * k + d) = s.velocity[k][d] - v0[k][d];
+    const Eigen::MatrixXd A = Eigen::MatrixXd(M.asDiagonal()) - h * h * J - h * D;
+    const Eigen::VectorXd b = h * (F + h * J * V);
+    EXPECT_LT((A * dv - b).norm(), 1e-6 * b.norm()) << "viscosity " << viscosity;
+    EXPECT_GT(dv.norm(), 1e-3);
+  }
+}
+
+// Many sweeps solve the step's linear system: explicit Euler with viscosity then satisfies
+// m_i (v_i' - v_i) = h f_i + h sum_e c_e (v_j' - v_i') (D17), and the axial Jacobian
+// m_i (v_i' - v_i) = h f_i + sum_e (h^2 kappa_e u u^T + h c_e I)(v_j' - v_i').
+TEST_P(Integrators, ConvergedSweepsSolveTheImplicitVelocityStep) {
+  using M3 = Eigen::Matrix3d;
+  for (Jacobian jac : {Jacobian::Isotropic, Jacobian::Axial}) {
+    Params p = params(jac == Jacobian::Axial ? Integrator::Approx : Integrator::Explicit);
+    p.jacobian = jac;
+    p.viscosity = 5;
+    p.sweeps = 400;
+    if (!supports(p)) continue;
+    auto sim = make(mesh, p);
+    sim->set_state(x0, v0);
+    const auto f = sim->forces();
+    const Snapshot s0 = sim->snapshot();
+    sim->step();
+    const Snapshot s = sim->snapshot();
+    const double h = p.h();
+    std::vector<V3> residual(x0.size());
+    for (size_t k = 0; k < x0.size(); ++k)
+      residual[k] = s0.mass[k] * (v3(s.velocity[k]) - v3(v0[k])) - h * v3(f[k]);
+    for (const EdgeView& e : s0.edges) {
+      const double msum = s0.mass[e.a] + s0.mass[e.b];
+      const V3 u = (v3(s0.position[e.a]) - v3(s0.position[e.b])).normalized();
+      const M3 W = (jac == Jacobian::Axial ? M3(h * h * p.kappa * msum * u * u.transpose()) : M3(M3::Zero())) +
+                   h * p.viscosity * msum * M3::Identity();
+      const V3 dv = v3(s.velocity[e.b]) - v3(s.velocity[e.a]);
+      residual[e.a] -= W * dv;
+      residual[e.b] += W * dv;
     }
-  sim->step();
-  const auto s = sim->snapshot();
-  Eigen::VectorXd dv(3 * n);
-  for (size_t k = 0; k < n; ++k)
-    for (int d = 0; d < 3; ++d) dv(3 * k + d) = s.velocity[k][d] - v0[k][d];
-  const Eigen::MatrixXd A = Eigen::MatrixXd(M.asDiagonal()) - h * h * J;
-  const Eigen::VectorXd b = h * (F + h * J * V);
-  EXPECT_LT((A * dv - b).norm(), 1e-6 * b.norm());
-  EXPECT_GT(dv.norm(), 1e-3);
+    double scale = 0;
+    for (size_t k = 0; k < x0.size(); ++k) scale = std::max(scale, h * v3(f[k]).norm());
+    for (size_t k = 0; k < x0.size(); ++k)
+      EXPECT_LT(residual[k].norm(), (GetParam() == "reference" ? 1e-10 : 1e-4) * scale) << k << " " << to_string(jac);
+  }
+}
+
+// The identity behind the viscosity (D17): the paper's step (approx, isotropic, no viscosity)
+// is symplectic Euler with an implicit viscosity c = h kappa: the same linear system.
+TEST_P(Integrators, PaperStepIsSymplecticEulerWithViscosityHKappa) {
+  Params paper = params(Integrator::Approx), viscous = params(Integrator::Explicit);
+  viscous.viscosity = viscous.h() * viscous.kappa;
+  auto a = make(mesh, paper), b = make(mesh, viscous);
+  a->set_state(x0, v0);
+  b->set_state(x0, v0);
+  for (int step = 0; step < 20; ++step) a->step(), b->step();
+  const Snapshot sa = a->snapshot(), sb = b->snapshot();
+  double vmax = 0;
+  for (size_t k = 0; k < x0.size(); ++k) vmax = std::max(vmax, v3(sa.velocity[k]).norm());
+  for (size_t k = 0; k < x0.size(); ++k) {
+    EXPECT_LT((v3(sa.velocity[k]) - v3(sb.velocity[k])).norm(), 10 * tol() * vmax) << k;
+    EXPECT_LT((v3(sa.position[k]) - v3(sb.position[k])).norm(), 10 * tol()) << k;
+  }
+  EXPECT_GT(vmax, 1e-2);
 }
 
 CRUMPLE_FOR_EACH_BACKEND(Integrators);

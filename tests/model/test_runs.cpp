@@ -52,6 +52,33 @@ TEST_P(Runs, MassAndMomentumConservedThroughSplitsAndRestores) {
   EXPECT_LT(worst_p, eps);
 }
 
+// The same with the viscosity (D17) on each integrator that has it: its implicit step exerts
+// equal and opposite forces, and a finite sweep count is corrected (D2), so totals stay exact.
+TEST_P(Runs, MassAndMomentumConservedWithViscosity) {
+  for (Integrator integ : {Integrator::Approx, Integrator::Explicit}) {
+    Params p = churn_params();
+    p.integrator = integ;
+    p.viscosity = 20;
+    p.kappa = integ == Integrator::Explicit ? 300 : p.kappa;
+    auto sim = make(make_grid(16), p);
+    const Totals t0 = sim->totals();
+    long splits = 0, restores = 0;
+    for (int step = 0; step < 150; ++step) {
+      const StepEvents ev = sim->step();
+      splits += ev.splits;
+      restores += ev.restores;
+    }
+    const Totals t = sim->totals();
+    EXPECT_EQ(sim->check_topology(), "");
+    EXPECT_GE(splits, 100) << to_string(integ);
+    EXPECT_GE(restores, 20) << to_string(integ);
+    const double eps = GetParam() == "reference" ? 1e-12 : 1e-5;
+    EXPECT_LT(std::abs(t.mass - t0.mass), eps);
+    for (int d = 0; d < 3; ++d) EXPECT_LT(std::abs(t.momentum[d] - t0.momentum[d]), eps) << to_string(integ);
+    EXPECT_LT(t.kinetic, 1e3);  // bounded
+  }
+}
+
 // Splitting then restoring every interior edge of a grid, one at a time, gives back exactly
 // the original topology (same ids) and masses.
 TEST_P(Runs, SplitThenRestoreGivesBackTheTopology) {
