@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 
+#include "crumple/crumple.h"
 #include "run_command.h"
 #include "sim/backends.h"
 
@@ -19,6 +20,7 @@ CLI::Transformer choice(const std::map<std::string, E>& names) {
 int main(int argc, char** argv) {
   CLI::App cli{"crumple: real-time paper crumpling on an adaptive mass-spring mesh"};
   cli.require_subcommand(1);
+  cli.set_version_flag("--version", std::string("crumple ") + version());
   app::RunOptions o;
   Params& p = o.params;
   CLI::App* run = cli.add_subcommand("run", "Simulate a sheet; optionally write stats.csv and OBJ frames");
@@ -88,7 +90,7 @@ int main(int argc, char** argv) {
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return cli.exit(e);  // --help
+    if (e.get_exit_code() == 0) return cli.exit(e);  // --help, --version
     std::fprintf(stderr, "crumple: error: %s\n", e.what());
     return app::kBadInput;
   }

@@ -93,6 +93,13 @@ StepEvents FastSimulator::adapt_apply() {
   StepEvents ev;
   ev.splits = apply_splits();
   ev.restores = apply_restores();
+  // The ids, read off the candidates in event order: a split leaves its edge auxiliary, a
+  // restore makes its auxiliary edge a mesh edge again, and nothing else changes either flag.
+  // (A restore may free a candidate that did not split: hence the alive bit in the test.)
+  for (int e : scratch_.splits)
+    if ((topo_.E.flags[e] & (kAlive | kMesh)) == kAlive) ev.split_edges.push_back(topo_.E.lid[e]);
+  for (int e : scratch_.restores)
+    if (topo_.E.flags[e] & kMesh) ev.restored_edges.push_back(topo_.E.lid[e]);
   renew_normals();
   return ev;
 }

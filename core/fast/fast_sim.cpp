@@ -135,9 +135,15 @@ StepEvents FastSimulator::step() {
   }
   normals_valid_ = false;
   compute_forces();
+  add_grab_forces();
   integrate();
   time_ += params_.h();
+  apply_manipulators();
   const StepEvents ev = adapt();
+  if (!manip_.empty()) {  // a split's new vertex may land inside an obstacle
+    apply_manipulators();
+    normals_valid_ = false;
+  }
   if (layout_stale(topo_, layout_fraction_)) {
     PassTimer t(pass_seconds_, int(Pass::Layout));
     relayout(topo_, par_, layout_scratch_);

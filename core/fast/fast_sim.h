@@ -82,6 +82,8 @@ class FastSimulator final : public Simulator {
   bool restore(int e) override;
   void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;
   void set_masses(const std::vector<double>& m) override;
+  void set_manipulators(const Manipulators& m) override;
+  void render(RenderBuffers& out, bool triangles) override;
 
   /// Runs one pass of a step on the current state (benchmarks time passes one by one).
   void run_pass(Pass p);
@@ -128,6 +130,10 @@ class FastSimulator final : public Simulator {
     std::array<int, 2> tris{-1, -1};     ///< (n,j,l), (n,i,r)
     int record = -1;                     ///< the split record
   };
+  // The caller's manipulators (fast_manipulators.cpp).
+  int live_slot(int id) const;  ///< slot of live vertex id, else -1
+  void add_grab_forces();       ///< after compute_forces: into f and the first guess
+  void apply_manipulators();    ///< spheres, planes, then pins
   // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13), the
   // restores in waves (D14), then the areas and normals renewed where triangles changed.
   void collect_events();
@@ -180,6 +186,7 @@ class FastSimulator final : public Simulator {
     std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
   };
   AdaptScratch scratch_;
+  Manipulators manip_;                    ///< the caller's, applied every step
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_edits_ = false;             ///< see set_serial_edits

@@ -112,6 +112,7 @@ std::vector<Vec3d> FastSimulator::forces() const {
   FastSimulator tmp(*this);
   tmp.compute_normals();
   tmp.compute_forces();
+  tmp.add_grab_forces();
   std::vector<Vec3d> out;
   for (int id = 0; id < tmp.topo_.V.size(); ++id) {
     const int v = tmp.topo_.V.phys[id];

@@ -30,7 +30,10 @@ namespace crumple::fast {
 
 class Parallel {
  public:
-  explicit Parallel(int threads) : threads_(threads < 1 ? 1 : threads) {
+  /// threads >= 1: a task_arena of that many (1: plain loops, no TBB at all). threads == 0:
+  /// no arena of its own; parallel_for runs in whatever arena the caller is in, so an engine
+  /// decides the threads (the embedding API's "caller's arena"). Negative counts as 1.
+  explicit Parallel(int threads) : threads_(threads < 0 ? 1 : threads) {
     if (threads_ > 1) arena_ = std::make_unique<tbb::task_arena>(threads_);
   }
   Parallel(const Parallel& o) : Parallel(o.threads_) {}
@@ -41,25 +44,30 @@ class Parallel {
   Parallel(Parallel&&) = default;
   Parallel& operator=(Parallel&&) = default;
 
-  int threads() const { return threads_; }
+  /// Worker count: the arena's own, or the caller's arena's concurrency (threads == 0).
+  int threads() const { return threads_ > 0 ? threads_ : tbb::this_task_arena::max_concurrency(); }
 
   /// Runs kernel(begin, end) over [0, n) in chunks of at least `grain`.
   template <class Kernel>
   void run(int n, int grain, const Kernel& kernel) const {
     if (n <= 0) return;
-    if (!arena_ || n <= grain) {
+    if (threads_ == 1 || n <= grain) {
       kernel(0, n);
       return;
     }
     int before = 0, after = 0;  // addresses for the annotations above
     CRUMPLE_TSAN_RELEASE(&before);
-    arena_->execute([&] {
+    auto loop = [&] {
       tbb::parallel_for(tbb::blocked_range<int>(0, n, grain), [&](const tbb::blocked_range<int>& r) {
         CRUMPLE_TSAN_ACQUIRE(&before);
         kernel(r.begin(), r.end());
         CRUMPLE_TSAN_RELEASE(&after);
       });
-    });
+    };
+    if (arena_)
+      arena_->execute(loop);
+    else
+      loop();
     CRUMPLE_TSAN_ACQUIRE(&after);
   }
 

@@ -283,6 +283,7 @@ StepEvents ReferenceSimulator::adapt() {
     if (!split_edge(e, n, uniform(params_.seed, steps_, std::uint32_t(e), Draw::FlatSign))) continue;
     for (int t : mesh_.edges[e].split.t) stamp(t);
     ++ev.splits;
+    ev.split_edges.push_back(e);
   }
   for (int e : restores) {
     const SplitRecord& s = mesh_.edges[e].split;
@@ -291,6 +292,7 @@ StepEvents ReferenceSimulator::adapt() {
     restore_edge(e);
     for (int k : t) stamp(k);
     ++ev.restores;
+    ev.restored_edges.push_back(e);
   }
   return ev;
 }

@@ -35,14 +35,18 @@ ReferenceSimulator::ReferenceSimulator(const InputMesh& input, const Params& par
 
 StepEvents ReferenceSimulator::step() {
   const double h = params_.h();
-  integrate(h, total_forces());
+  std::vector<V3> f = total_forces();
+  add_grab_forces(f);
+  integrate(h, f);
   time_ += h;
   for (int k : scene_.pinned) {  // hang scene: pinned corners stay where they started
     mesh_.verts[k].x = to_v3(scene_.position[k]);
     mesh_.verts[k].v.setZero();
   }
   apply_sphere();
+  apply_manipulators();
   const StepEvents ev = adapt();
+  apply_manipulators();  // a split's new vertex may land inside an obstacle
   ++steps_;
   return ev;
 }
@@ -182,8 +186,10 @@ std::vector<Vec3d> ReferenceSimulator::normals() const {
 }
 
 std::vector<Vec3d> ReferenceSimulator::forces() const {
+  std::vector<V3> f = total_forces();
+  add_grab_forces(f);
   std::vector<Vec3d> out;
-  for (const V3& f : total_forces()) out.push_back(to_arr(f));
+  for (const V3& g : f) out.push_back(to_arr(g));
   return out;
 }
 

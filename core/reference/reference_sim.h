@@ -44,6 +44,8 @@ class ReferenceSimulator final : public Simulator {
   bool restore(int e) override;
   void set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) override;
   void set_masses(const std::vector<double>& m) override;
+  void set_manipulators(const Manipulators& m) override;
+  void render(RenderBuffers& out, bool triangles) override;
 
   const Mesh& mesh() const { return mesh_; }
 
@@ -66,6 +68,9 @@ class ReferenceSimulator final : public Simulator {
   void integrate_explicit(double h, const std::vector<V3>& f);
   void integrate_implicit(double h, const std::vector<V3>& f);
   void apply_sphere();
+  // ref_manipulators.cpp
+  void add_grab_forces(std::vector<V3>& f) const;
+  void apply_manipulators();
   // ref_adapt.cpp
   double break_probability(int e, const std::vector<V3>& n) const;
   bool can_restore(int e) const;
@@ -81,6 +86,7 @@ class ReferenceSimulator final : public Simulator {
   std::uint64_t steps_ = 0;
   std::vector<std::uint64_t> tri_stamp_;  ///< pass number that last changed each triangle
   std::uint64_t pass_ = 0;                ///< topology passes so far
+  Manipulators manip_;                    ///< the caller's, applied every step
   std::vector<V3> pass_normals_, pass_forces_;  ///< run_pass() state between passes (1-based stamp)
 };
 

@@ -23,6 +23,7 @@
 
 #include "mesh/input_mesh.h"
 #include "model/params.h"
+#include "sim/manipulators.h"
 
 namespace crumple {
 
@@ -47,6 +48,8 @@ struct Totals {
 struct StepEvents {
   int splits = 0;    ///< edges broken and split                 [Eq 6, Eq 2-4, 7]
   int restores = 0;  ///< auxiliary edges restored               [Eq 10-12]
+  std::vector<int> split_edges;     ///< ids of the split edges (now auxiliary), ascending
+  std::vector<int> restored_edges;  ///< ids of the restored edges (mesh edges again), ascending
 };
 
 /// The adaptive-mesh tests of one edge on the current state (MODEL.md §4, §7), before applying.
@@ -76,6 +79,13 @@ struct Snapshot {
 /// Writes the live vertices (renumbered densely) and triangles of a snapshot as an OBJ, with
 /// every auxiliary spring (a crease held by a broken edge) as an `l a b` line.
 void write_snapshot_obj(const std::string& path, const Snapshot& s);
+
+/// What a renderer reads, packed by Simulator::render in the layout a GPU takes.
+struct RenderBuffers {
+  std::vector<float> positions;         ///< x, y, z per vertex id (dead ids: zeros, never indexed)
+  std::vector<float> normals;           ///< unit vertex normal per vertex id (MODEL.md §1)
+  std::vector<std::uint32_t> triangles; ///< the live triangles' vertex ids, three each, by id
+};
 
 class Simulator {
  public:
@@ -117,6 +127,14 @@ class Simulator {
   /// Empty when the topology is a valid oriented manifold with consistent helper structures;
   /// otherwise a description of the first inconsistency.
   virtual std::string check_topology() const = 0;
+
+  /// Manipulators applied from the next step on (sim/manipulators.h says how); ids must be
+  /// checked by the caller (the embedding API does).
+  virtual void set_manipulators(const Manipulators& m) = 0;
+  /// Writes positions and normals of the current state into out; the triangles too if
+  /// `triangles` (a renderer needs them only when the topology changed). Not const: a backend
+  /// may bring cached normals up to date (the same values its next step would compute).
+  virtual void render(RenderBuffers& out, bool triangles) = 0;
 
   // --- passes, for per-pass benchmarks ---
   /// The passes of a step that run_pass() can run alone, in step order.

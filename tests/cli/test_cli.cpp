@@ -77,6 +77,13 @@ TEST(Cli, RunWritesStatsAndFinalObj) {
   EXPECT_FALSE(fs::exists(d / "frame_00015.obj"));
 }
 
+// Catches a missing --version or one that disagrees with CMake's project version.
+TEST(Cli, VersionIsTheProjectVersion) {
+  const Result r = crumple("--version");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, std::string("crumple ") + CRUMPLE_EXPECTED_VERSION + "\n");
+}
+
 TEST(Cli, BadArgumentsExitTwoWithOneLine) {
   expect_error(crumple("run --grid 1"), 2, "--grid");
   expect_error(crumple("run --phi 1.5"), 2, "--phi");

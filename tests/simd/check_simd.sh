@@ -2,7 +2,7 @@
 # Shows that the fast kernels vectorize (and that the no-SIMD build really is scalar), from the
 # machine code the build made: each kernel named below must contain packed single-precision
 # arithmetic (vaddps, vfmadd231ps, ...) in the SIMD build and none in the no-SIMD build.
-# Usage: check_simd.sh <libcrumple_fast.a> simd|scalar
+# Usage: check_simd.sh <libcrumple.a or .so> simd|scalar
 # A kernel that silently stops vectorizing (a clamp the compiler turns into a branch, a
 # constant read through a pointer in the loop) fails here with its name.
 set -euo pipefail

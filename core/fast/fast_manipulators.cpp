@@ -1,0 +1,109 @@
+// The fast backend's manipulators (sim/manipulators.h): grab forces joined to the gathered
+// forces and the first Jacobi guess, the position passes (spheres and planes as one range
+// kernel over vertex slots, then the pins), and the render buffers in logical ids.
+#include <cmath>
+
+#include "fast/fast_sim.h"
+
+namespace crumple::fast {
+
+namespace {
+constexpr int kGrain = 2048;  ///< minimum vertices per parallel chunk
+
+/// Spheres then planes, in list order, on the vertex slots [begin, end). Float, like the rest of
+/// the backend; each vertex is independent, so any thread count gives the same bits.
+void constrain_range(Vertices& V, const Manipulators& m, int begin, int end) {
+  for (const KinematicSphere& s : m.spheres) {
+    const float cx = float(s.center[0]), cy = float(s.center[1]), cz = float(s.center[2]), R = float(s.radius);
+    for (int v = begin; v < end; ++v) {
+      if (!(V.m[v] > 0)) continue;
+      const float dx = V.x[v] - cx, dy = V.y[v] - cy, dz = V.z[v] - cz;
+      const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (!(r < R) || r == 0) continue;  // a vertex at the very centre has no outward ray
+      const float ux = dx / r, uy = dy / r, uz = dz / r;
+      V.x[v] = cx + R * ux, V.y[v] = cy + R * uy, V.z[v] = cz + R * uz;
+      const float in = V.vx[v] * ux + V.vy[v] * uy + V.vz[v] * uz;
+      if (in < 0) V.vx[v] -= in * ux, V.vy[v] -= in * uy, V.vz[v] -= in * uz;
+    }
+  }
+  for (const KinematicPlane& p : m.planes) {
+    const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
+    const float nx = float(p.normal[0] / len), ny = float(p.normal[1] / len), nz = float(p.normal[2] / len);
+    const float ox = float(p.point[0]), oy = float(p.point[1]), oz = float(p.point[2]);
+    for (int v = begin; v < end; ++v) {
+      if (!(V.m[v] > 0)) continue;
+      const float d = (V.x[v] - ox) * nx + (V.y[v] - oy) * ny + (V.z[v] - oz) * nz;
+      if (!(d < 0)) continue;
+      V.x[v] -= d * nx, V.y[v] -= d * ny, V.z[v] -= d * nz;
+      const float in = V.vx[v] * nx + V.vy[v] * ny + V.vz[v] * nz;
+      if (in < 0) V.vx[v] -= in * nx, V.vy[v] -= in * ny, V.vz[v] -= in * nz;
+    }
+  }
+}
+}  // namespace
+
+void FastSimulator::set_manipulators(const Manipulators& m) { manip_ = m; }
+
+int FastSimulator::live_slot(int id) const {
+  if (id < 0 || id >= topo_.V.size()) return -1;
+  const int v = topo_.V.phys[id];
+  return topo_.V.m[v] > 0 ? v : -1;
+}
+
+// The force joins f (what explicit_velocity and the sweeps read) and the first guess g, which
+// gather_forces made linear in f: h F / (m + 2 sum W_e) for the bounded predictor,
+// h F / m for the explicit one (DECISIONS.md D1), as the reference's predictor has it.
+void FastSimulator::add_grab_forces() {
+  Vertices& V = topo_.V;
+  const double h = params_.h();
+  for (const Grab& g : manip_.grabs) {
+    const int v = live_slot(g.vertex);
+    if (v < 0) continue;
+    const double m = V.m[v], row = m + double(V.ksum[v]);  // ksum: sum of W_e, from gather_forces
+    const std::array<double, 3> F = grab_force(g, {V.x[v], V.y[v], V.z[v]}, {V.vx[v], V.vy[v], V.vz[v]}, row, h);
+    V.fx[v] += float(F[0]), V.fy[v] += float(F[1]), V.fz[v] += float(F[2]);
+    const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * double(V.ksum[v])) : h / m;
+    V.g[v].x += float(gain * F[0]), V.g[v].y += float(gain * F[1]), V.g[v].z += float(gain * F[2]);
+  }
+}
+
+void FastSimulator::apply_manipulators() {
+  if (!manip_.spheres.empty() || !manip_.planes.empty())
+    par_.run(topo_.V.size(), kGrain, [&](int b, int e) { constrain_range(topo_.V, manip_, b, e); });
+  Vertices& V = topo_.V;
+  for (const Pin& p : manip_.pins) {
+    const int v = live_slot(p.vertex);
+    if (v < 0) continue;
+    V.x[v] = float(p.target[0]), V.y[v] = float(p.target[1]), V.z[v] = float(p.target[2]);
+    V.vx[v] = V.vy[v] = V.vz[v] = 0;
+  }
+}
+
+void FastSimulator::render(RenderBuffers& out, bool triangles) {
+  if (!normals_valid_) {  // the same normals the next step would compute first
+    compute_normals();
+    normals_valid_ = true;
+  }
+  const Vertices& V = topo_.V;
+  out.positions.assign(3 * std::size_t(V.size()), 0.0f);
+  out.normals.assign(3 * std::size_t(V.size()), 0.0f);
+  par_.run(V.size(), kGrain, [&](int b, int e) {
+    for (int id = b; id < e; ++id) {
+      const int v = V.phys[id];
+      if (!(V.m[v] > 0)) continue;
+      float* x = &out.positions[3 * std::size_t(id)];
+      float* n = &out.normals[3 * std::size_t(id)];
+      x[0] = V.x[v], x[1] = V.y[v], x[2] = V.z[v];
+      n[0] = V.nx[v], n[1] = V.ny[v], n[2] = V.nz[v];
+    }
+  });
+  if (!triangles) return;
+  out.triangles.clear();
+  for (int id = 0; id < topo_.T.size(); ++id) {
+    const int t = topo_.T.phys[id];
+    if (!topo_.T.alive[t]) continue;
+    for (int c : topo_.T.corners(t)) out.triangles.push_back(std::uint32_t(V.lid[c]));
+  }
+}
+
+}  // namespace crumple::fast
