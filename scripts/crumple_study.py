@@ -45,8 +45,9 @@ def viscous(n, seed, c, substeps, kappa=1e4, extra=()):
 class Runner:
     """Runs crumple_stats.measure over many command lines, jobs at a time, with a cache."""
 
-    def __init__(self, jobs, fresh=False):
+    def __init__(self, jobs, fresh=False, cached_only=False):
         self.jobs = jobs
+        self.cached_only = cached_only
         self.path = os.path.join(OUT, "runs.json")
         self.cache = {} if fresh or not os.path.exists(self.path) else json.load(open(self.path))
 
@@ -54,6 +55,8 @@ class Runner:
         keys = [" ".join(str(a) for a in args) for args in arg_lists]
         todo = [(k, a) for k, a in zip(keys, arg_lists) if k not in self.cache]
         todo = list(dict(todo).items())
+        if todo and self.cached_only:
+            raise LookupError(f"{len(todo)} runs not in the cache")
         with cf.ThreadPoolExecutor(self.jobs) as pool:
             futures = {pool.submit(self._one, a): k for k, a in todo}
             for i, f in enumerate(cf.as_completed(futures)):
@@ -156,8 +159,11 @@ def stage_converge(runner, quick, only=None):
         entry = {"kappa": kappa, "levels": {}, "converged_at": None}
         prev = None
         for S in levels:
-            runs = runner.run([["--seed", s, "--backend", "fast", "--threads", 1, "--integrator", "explicit",
-                                "--viscosity", DEFAULT_C, "--substeps", S, "--kappa", kappa] + mesh for s in seeds])
+            try:
+                runs = runner.run([["--seed", s, "--backend", "fast", "--threads", 1, "--integrator", "explicit",
+                                    "--viscosity", DEFAULT_C, "--substeps", S, "--kappa", kappa] + mesh for s in seeds])
+            except LookupError:  # --cached-only: the levels run so far
+                break
             cur = summary(runs)
             entry["levels"][str(S)] = cur
             print(f"{label} S={S}: failed {cur['failed']} " + " ".join(
@@ -312,13 +318,15 @@ def main(argv=None):
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--fresh", action="store_true")
+    p.add_argument("--cached-only", action="store_true", help="use only cached runs (converge: stop at the "
+                   "last level run in full)")
     p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels)")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
     a = p.parse_args(argv)
     if not os.path.exists(crumple_stats.EXE):
         sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
-    runner = Runner(a.jobs, a.fresh)
+    runner = Runner(a.jobs, a.fresh, a.cached_only)
     data = load_result()
     if a.stage == "converge":
         data[a.stage] = stage_converge(runner, a.quick, a.cases)
