@@ -10,6 +10,10 @@
 // one edge pass (edge_forces) followed by a per-vertex gather. `topology_apply` is the whole
 // adapt pass (its test, the splits in parallel rounds and the serial restores); `adapt_test` the
 // test alone. The fast backend's `layout` pass (docs/DECISIONS.md D12) is not timed alone.
+// Fast backend only: `bytes`, what the pass must move counted from the layout of the state it
+// runs on (bytes_moved.h; for topology_apply with the events decide() finds on that state, an
+// upper bound on those applied), and `bytes_per_second`, those bytes over the pass's time: the
+// achieved bandwidth the report sets against BM_Stream's.
 #include <oneapi/tbb/global_control.h>
 
 #include <cmath>
@@ -19,6 +23,7 @@
 #include <tuple>
 
 #include "bench_common.h"
+#include "bytes_moved.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
 
@@ -40,11 +45,21 @@ std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, in
   return sim;
 }
 
+/// What `pass` moves on sim's current state (0: not a fast backend).
+double bytes_of(const Simulator& sim, const std::string& pass) {
+  const std::optional<LayoutSizes> sizes = layout_sizes(sim);
+  if (!sizes) return 0;
+  double events = 0;
+  if (pass == "topology_apply")
+    for (const Decision& d : sim.decide()) events += d.kind != 0;
+  return pass_bytes(pass, *sizes, Params{}.sweeps, events);
+}
+
 void BM_Pass(benchmark::State& state, const std::string& backend, int threads, int n, const std::string& pass) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   const std::unique_ptr<Simulator>& base = prepared(backend, threads, n);
   const std::vector<std::string> order = base->pass_names();
-  double seconds = 0;
+  double seconds = 0, bytes = -1;
   for (auto _ : state) {
     std::unique_ptr<Simulator> sim = base->clone();
     sim->step();  // untimed warm-up step: a fresh clone's first splits reallocate (bench_frame.cpp)
@@ -52,6 +67,7 @@ void BM_Pass(benchmark::State& state, const std::string& backend, int threads, i
       if (earlier == pass) break;
       if (earlier != "topology_apply") sim->run_pass(earlier);
     }
+    if (bytes < 0) bytes = bytes_of(*sim, pass);  // untimed, once: every iteration runs on the same state
     const Clock::time_point t0 = Clock::now();
     sim->run_pass(pass);
     const double dt = seconds_between(t0, Clock::now());
@@ -60,6 +76,10 @@ void BM_Pass(benchmark::State& state, const std::string& backend, int threads, i
   }
   state.counters["ms_per_pass"] = state.iterations() ? 1e3 * seconds / double(state.iterations()) : 0.0;
   state.counters["vertices"] = base->totals().vertices;
+  if (bytes > 0) {
+    state.counters["bytes"] = bytes;
+    state.counters["bytes_per_second"] = benchmark::Counter(bytes * double(state.iterations()), benchmark::Counter::kIsRate);
+  }
 }
 
 void register_pass_benchmarks() {
