@@ -11,8 +11,8 @@
 // adapt pass (its test, the splits in parallel rounds and the serial restores); `adapt_test` the
 // test alone. The fast backend's `layout` pass (docs/DECISIONS.md D12) is not timed alone.
 // Fast backend only: `bytes`, what the pass must move counted from the layout of the state it
-// runs on (bytes_moved.h; for topology_apply with the events decide() finds on that state, an
-// upper bound on those applied), and `bytes_per_second`, those bytes over the pass's time: the
+// runs on (bytes_moved.h; for topology_apply with the splits and restores of that step, from a
+// dry run of it on a clone), and `bytes_per_second`, those bytes over the pass's time: the
 // achieved bandwidth the report sets against BM_Stream's.
 #include <oneapi/tbb/global_control.h>
 
@@ -45,13 +45,15 @@ std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, in
   return sim;
 }
 
-/// What `pass` moves on sim's current state (0: not a fast backend).
+/// What `pass` moves in the step that starts from sim's state (0: not a fast backend).
 double bytes_of(const Simulator& sim, const std::string& pass) {
   const std::optional<LayoutSizes> sizes = layout_sizes(sim);
   if (!sizes) return 0;
   double events = 0;
-  if (pass == "topology_apply")
-    for (const Decision& d : sim.decide()) events += d.kind != 0;
+  if (pass == "topology_apply") {  // the events this step applies, from a dry run of it
+    const StepEvents ev = sim.clone()->step();
+    events = ev.splits + ev.restores;
+  }
   return pass_bytes(pass, *sizes, Params{}.sweeps, events);
 }
 
@@ -63,11 +65,11 @@ void BM_Pass(benchmark::State& state, const std::string& backend, int threads, i
   for (auto _ : state) {
     std::unique_ptr<Simulator> sim = base->clone();
     sim->step();  // untimed warm-up step: a fresh clone's first splits reallocate (bench_frame.cpp)
+    if (bytes < 0) bytes = bytes_of(*sim, pass);  // untimed, once: every iteration runs the same step
     for (const std::string& earlier : order) {  // untimed: the inputs this pass sees in a step
       if (earlier == pass) break;
       if (earlier != "topology_apply") sim->run_pass(earlier);
     }
-    if (bytes < 0) bytes = bytes_of(*sim, pass);  // untimed, once: every iteration runs on the same state
     const Clock::time_point t0 = Clock::now();
     sim->run_pass(pass);
     const double dt = seconds_between(t0, Clock::now());
