@@ -25,7 +25,6 @@
 
 #include "bench_common.h"
 #include "prepared.h"
-#include "sim/backends.h"
 
 namespace crumple::bench {
 namespace {
@@ -56,11 +55,9 @@ double time_pass(Simulator& sim, const char* pass) {
 
 void BM_Events(benchmark::State& state, const std::string& backend, int threads, int n) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Prepared& p = prepared(backend, threads, n);
-  if (!p.error.empty()) {
-    state.SkipWithError(p.error.c_str());
-    return;
-  }
+  Prepared* prep = prepared_or_skip(state, backend, threads, n);
+  if (!prep) return;
+  const Prepared& p = *prep;
   const StepEvents batch = recorded_batch(p);
   const double events = batch.splits + batch.restores;
   if (events == 0) {
@@ -81,20 +78,15 @@ void BM_Events(benchmark::State& state, const std::string& backend, int threads,
 }
 
 void register_event_benchmarks() {
-  for (const std::string& backend : backend_names())
-    for (int threads : {1, 2}) {
-      if (backend == "reference" && threads != 1) continue;
-      for (int n : {128, 256, 512}) {
-        const std::string name =
-            "BM_Events/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        // A fixed iteration count: each iteration's untimed set-up (clone, warm-up frame,
-        // physics passes) costs many times the timed events (cf. bench_pass.cpp).
-        benchmark::RegisterBenchmark(name.c_str(), BM_Events, backend, threads, n)
-            ->Unit(benchmark::kMicrosecond)
-            ->UseManualTime()
-            ->Iterations(8);
-      }
-    }
+  for_each_config([](const std::string& backend, int threads) {
+    for (int n : kPricedSizes)
+      // A fixed iteration count: each iteration's untimed set-up (clone, warm-up frame,
+      // physics passes) costs many times the timed events (cf. bench_pass.cpp).
+      benchmark::RegisterBenchmark(bench_name("Events", backend, threads, n).c_str(), BM_Events, backend, threads, n)
+          ->Unit(benchmark::kMicrosecond)
+          ->UseManualTime()
+          ->Iterations(8);
+  });
 }
 
 }  // namespace

@@ -123,6 +123,13 @@ Prepared& prepared(const std::string& backend, int threads, int n) {
   return it->second;
 }
 
+Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, int threads, int n) {
+  Prepared& p = prepared(backend, threads, n);
+  if (p.error.empty()) return &p;
+  state.SkipWithError(p.error.c_str());
+  return nullptr;
+}
+
 namespace {
 
 // BM_Frame/<backend>/<threads>/<N> (frozen = false) and BM_Frozen/<backend>/<threads>/<N>
@@ -147,11 +154,9 @@ void set_floor_counters(benchmark::State& state, const Simulator& sim, int subst
 
 void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, bool frozen) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Prepared& p = prepared(backend, threads, n);
-  if (!p.error.empty()) {
-    state.SkipWithError(p.error.c_str());
-    return;
-  }
+  Prepared* prep = prepared_or_skip(state, backend, threads, n);
+  if (!prep) return;
+  Prepared& p = *prep;
   const int k = frames_per_iteration(n);
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
@@ -195,17 +200,12 @@ void register_frame_benchmarks() {
       }
     }
   }
-  for (const std::string& backend : backend_names())
-    for (int threads : {1, 2}) {
-      if (backend == "reference" && threads != 1) continue;
-      for (int n : {128, 256, 512}) {
-        const std::string name =
-            "BM_Frozen/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, true)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-      }
-    }
+  for_each_config([](const std::string& backend, int threads) {
+    for (int n : kPricedSizes)
+      benchmark::RegisterBenchmark(bench_name("Frozen", backend, threads, n).c_str(), BM_Frame, backend, threads, n, true)
+          ->Unit(benchmark::kMillisecond)
+          ->UseManualTime();
+  });
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }
 

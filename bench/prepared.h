@@ -3,6 +3,8 @@
 // process.
 #pragma once
 
+#include <benchmark/benchmark.h>
+
 #include <memory>
 #include <string>
 
@@ -20,5 +22,8 @@ struct Prepared {
 
 /// The cached prepared state (made on first use, under the caller's TBB thread limit).
 Prepared& prepared(const std::string& backend, int threads, int n);
+/// The same, or nullptr when it could not be prepared (the benchmark is then skipped with the
+/// reason).
+Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, int threads, int n);
 
 }  // namespace crumple::bench
