@@ -15,7 +15,8 @@
 // (BM_Frame - BM_Frozen holds it). The batch's size comes from a dry run of the same step on
 // another clone (Simulator::step's StepEvents): counters splits and restores per batch;
 // us_per_event is the ratio of the summed times, which noise biases less than the per-iteration
-// clamp.
+// clamp; mismatch counts iterations whose pass left other live counts than the dry run (0
+// expected: the run_pass sequence and step() decide the same batch).
 #include <oneapi/tbb/global_control.h>
 
 #include <algorithm>
@@ -41,10 +42,23 @@ std::unique_ptr<Simulator> before_events(const Prepared& p) {
   return sim;
 }
 
-StepEvents recorded_batch(const Prepared& p) {
+struct Batch {
+  StepEvents events;  ///< splits and restores of the recorded step
+  Totals after;       ///< the live counts they leave
+};
+
+Batch recorded_batch(const Prepared& p) {
   std::unique_ptr<Simulator> sim = p.sim->clone();
   for (int s = 0; s < p.substeps; ++s) sim->step();
-  return sim->step();
+  Batch b;
+  b.events = sim->step();
+  b.after = sim->totals();
+  return b;
+}
+
+/// The timed pass left other live counts than the recorded step: it applied another batch.
+bool differs(const Totals& a, const Totals& b) {
+  return a.vertices != b.vertices || a.edges != b.edges || a.auxiliary != b.auxiliary || a.triangles != b.triangles;
 }
 
 double time_pass(Simulator& sim, const char* pass) {
@@ -58,20 +72,24 @@ void BM_Events(benchmark::State& state, const std::string& backend, int threads,
   Prepared* prep = prepared_or_skip(state, backend, threads, n);
   if (!prep) return;
   const Prepared& p = *prep;
-  const StepEvents batch = recorded_batch(p);
+  const Batch recorded = recorded_batch(p);
+  const StepEvents batch = recorded.events;
   const double events = batch.splits + batch.restores;
   if (events == 0) {
     state.SkipWithError("the recorded step has no events");
     return;
   }
   double applied = 0;
+  long mismatch = 0;
   for (auto _ : state) {
     std::unique_ptr<Simulator> with = before_events(p);  // untimed
     std::unique_ptr<Simulator> test_only = with->clone();
     const double seconds = time_pass(*with, "topology_apply") - time_pass(*test_only, "adapt_test");
     state.SetIterationTime(std::max(0.0, seconds) / events);
     applied += seconds;
+    mismatch += differs(with->totals(), recorded.after);  // untimed
   }
+  state.counters["mismatch"] = double(mismatch);
   state.counters["splits"] = batch.splits;
   state.counters["restores"] = batch.restores;
   state.counters["us_per_event"] = state.iterations() ? 1e6 * applied / (events * double(state.iterations())) : 0.0;

@@ -353,8 +353,9 @@ def roofline_section(benches, charts):
         lines += ["| configuration | N | pass | MB moved | median ms | GB/s | of STREAM |", "|---|---:|---|---:|---:|---:|---:|"]
         for key, n, p, ms, b in rows:
             gbs = b / (ms * 1e-3) / 1e9
+            share = 100.0 * gbs / roof(stream, key[1])
             lines.append(f"| {short(key)} | {n} | {p} | {b / 1e6:.1f} | {fmt_ms(ms)} | {gbs:.1f} | "
-                         f"{100.0 * gbs / roof(stream, key[1]):.0f} % |")
+                         f"{f'{share:.0f} %' if math.isfinite(share) else '-'} |")
         lines.append("")
     if frozen:
         lines += ["The frozen step (`BM_Frozen`: normals, edge_forces, gather, integrate on the prepared mesh) against "
@@ -364,9 +365,10 @@ def roofline_section(benches, charts):
         keys = order_configs({r[0] for r in frozen})
         for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
             ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
-            floor = by / (roof(stream, key[1]) * 1e9) * 1e3
-            lines.append(f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {floor:.3g} | "
-                         f"{ms / floor:.1f}x | {by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
+            floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
+            bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
+            lines.append(f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {bound} | "
+                         f"{by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
         lines.append("")
     return lines
 
@@ -388,8 +390,9 @@ def events_section(benches):
              "|---|---:|---:|---:|---:|---:|"]
     keys = order_configs({r[0] for r in rows})
     for key, n, b in sorted(rows, key=lambda r: (keys.index(r[0]), r[1])):
+        other = " (**iterations applied another batch**)" if any(v > 0 for v in b.counters.get("mismatch", [])) else ""
         lines.append(f"| {short(key)} | {n} | {b.counter('splits'):,.0f} | {b.counter('restores'):,.0f} | "
-                     f"{1000.0 * b.median():.2f} | {b.counter('us_per_event'):.2f} |")
+                     f"{1000.0 * b.median():.2f} | {b.counter('us_per_event'):.2f}{other} |")
     lines.append("")
     return lines
 
