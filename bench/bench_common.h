@@ -19,6 +19,8 @@
 #include <chrono>
 #include <string>
 
+#include "sim/backends.h"
+
 namespace crumple::bench {
 
 /// The backend's name in benchmark names: the fast backend built with CRUMPLE_DISABLE_SIMD is
@@ -32,6 +34,22 @@ inline std::string bench_label(const std::string& backend) {
 
 /// Sheet sizes: N x N vertex grids on the unit square.
 inline constexpr std::array<int, 6> kSizes{32, 64, 128, 256, 512, 1024};
+
+/// Sheet sizes of the benchmarks that price the physics and the events (BM_Frozen, BM_Events).
+inline constexpr std::array<int, 3> kPricedSizes{128, 256, 512};
+
+/// BM_<kind>/<backend label>/<threads>/<n>.
+inline std::string bench_name(const std::string& kind, const std::string& backend, int threads, int n) {
+  return "BM_" + kind + "/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
+}
+
+/// Calls f(backend, threads) for every backend on 1 and 2 threads, the serial reference on 1.
+template <class F>
+void for_each_config(F f) {
+  for (const std::string& backend : backend_names())
+    for (int threads : {1, 2})
+      if (backend != "reference" || threads == 1) f(backend, threads);
+}
 
 /// Frames timed back to back in one iteration, fixed per N (never adapted to the measured
 /// speed) so that every backend, thread count and revision times exactly the same frames.

@@ -47,6 +47,8 @@
 #include <tuple>
 
 #include "bench_common.h"
+#include "bytes_moved.h"
+#include "prepared.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
 #include "sim/run.h"
@@ -68,14 +70,6 @@ constexpr double kPrepFraction = 0.6;
 /// 70-74, `crumple run --grid 1024`, on the 2-core test machine while it was busy), and its
 /// preparation alone takes ~1.5 min, so N = 1024 is left to the fast backend.
 constexpr int kReferenceMaxN = 512;
-
-struct Prepared {
-  std::unique_ptr<Simulator> sim;  ///< state at the prepared point
-  int substeps = 1;
-  double vertices = 0, edges = 0;  ///< mean live counts at the end of each dry-run frame
-  long splits = 0, restores = 0;   ///< events of the whole dry-run batch
-  std::string error;               ///< non-empty: the benchmark is skipped with this message
-};
 
 Prepared make_prepared(const std::string& backend, int threads, int n) {
   Prepared p;
@@ -111,6 +105,8 @@ Prepared make_prepared(const std::string& backend, int threads, int n) {
   return p;
 }
 
+}  // namespace
+
 Prepared& prepared(const std::string& backend, int threads, int n) {
   static std::map<std::tuple<std::string, int, int>, Prepared> cache;
   const auto key = std::make_tuple(backend, threads, n);
@@ -127,6 +123,15 @@ Prepared& prepared(const std::string& backend, int threads, int n) {
   return it->second;
 }
 
+Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, int threads, int n) {
+  Prepared& p = prepared(backend, threads, n);
+  if (p.error.empty()) return &p;
+  state.SkipWithError(p.error.c_str());
+  return nullptr;
+}
+
+namespace {
+
 // BM_Frame/<backend>/<threads>/<N> (frozen = false) and BM_Frozen/<backend>/<threads>/<N>
 // (frozen = true): the latter times the same frames from the same prepared state with fracture
 // and restoration switched off (Simulator::set_adaptivity) before the warm-up frame: the
@@ -137,13 +142,21 @@ Prepared& prepared(const std::string& backend, int threads, int n) {
 // The frozen frames keep the prepared mesh, which the adaptive ones grow by ~1 % a frame, so
 // the difference also holds the physics of the elements the events add; BM_Frozen's vertices
 // and edges counters are the adaptive dry run's.)
+/// A frozen frame's bytes floor (fast backend): substeps frozen steps on the prepared mesh,
+/// which the frozen frames keep (bytes_moved.h); and those bytes over the frame time.
+void set_floor_counters(benchmark::State& state, const Simulator& sim, int substeps) {
+  const std::optional<LayoutSizes> sizes = layout_sizes(sim);
+  if (!sizes) return;
+  const double bytes = substeps * frozen_step_bytes(*sizes, Params{}.sweeps);
+  state.counters["bytes"] = bytes;
+  state.counters["bytes_per_second"] = benchmark::Counter(bytes * double(state.iterations()), benchmark::Counter::kIsRate);
+}
+
 void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, bool frozen) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Prepared& p = prepared(backend, threads, n);
-  if (!p.error.empty()) {
-    state.SkipWithError(p.error.c_str());
-    return;
-  }
+  Prepared* prep = prepared_or_skip(state, backend, threads, n);
+  if (!prep) return;
+  Prepared& p = *prep;
   const int k = frames_per_iteration(n);
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
@@ -169,6 +182,7 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   }
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);
+  if (frozen) set_floor_counters(state, *p.sim, p.substeps);
 }
 
 void register_frame_benchmarks() {
@@ -186,17 +200,12 @@ void register_frame_benchmarks() {
       }
     }
   }
-  for (const std::string& backend : backend_names())
-    for (int threads : {1, 2}) {
-      if (backend == "reference" && threads != 1) continue;
-      for (int n : {128, 256, 512}) {
-        const std::string name =
-            "BM_Frozen/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, true)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-      }
-    }
+  for_each_config([](const std::string& backend, int threads) {
+    for (int n : kPricedSizes)
+      benchmark::RegisterBenchmark(bench_name("Frozen", backend, threads, n).c_str(), BM_Frame, backend, threads, n, true)
+          ->Unit(benchmark::kMillisecond)
+          ->UseManualTime();
+  });
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }
 

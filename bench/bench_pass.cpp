@@ -10,6 +10,10 @@
 // one edge pass (edge_forces) followed by a per-vertex gather. `topology_apply` is the whole
 // adapt pass (its test, the splits in parallel rounds and the serial restores); `adapt_test` the
 // test alone. The fast backend's `layout` pass (docs/DECISIONS.md D12) is not timed alone.
+// Fast backend only: `bytes`, what the pass must move counted from the layout of the state it
+// runs on (bytes_moved.h; for topology_apply with the splits and restores of that step, from a
+// dry run of it on a clone), and `bytes_per_second`, those bytes over the pass's time: the
+// achieved bandwidth the report sets against BM_Stream's.
 #include <oneapi/tbb/global_control.h>
 
 #include <cmath>
@@ -19,6 +23,7 @@
 #include <tuple>
 
 #include "bench_common.h"
+#include "bytes_moved.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
 
@@ -40,14 +45,27 @@ std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, in
   return sim;
 }
 
+/// What `pass` moves in the step that starts from sim's state (0: not a fast backend).
+double bytes_of(const Simulator& sim, const std::string& pass) {
+  const std::optional<LayoutSizes> sizes = layout_sizes(sim);
+  if (!sizes) return 0;
+  double events = 0;
+  if (pass == "topology_apply") {  // the events this step applies, from a dry run of it
+    const StepEvents ev = sim.clone()->step();
+    events = ev.splits + ev.restores;
+  }
+  return pass_bytes(pass, *sizes, Params{}.sweeps, events);
+}
+
 void BM_Pass(benchmark::State& state, const std::string& backend, int threads, int n, const std::string& pass) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   const std::unique_ptr<Simulator>& base = prepared(backend, threads, n);
   const std::vector<std::string> order = base->pass_names();
-  double seconds = 0;
+  double seconds = 0, bytes = -1;
   for (auto _ : state) {
     std::unique_ptr<Simulator> sim = base->clone();
     sim->step();  // untimed warm-up step: a fresh clone's first splits reallocate (bench_frame.cpp)
+    if (bytes < 0) bytes = bytes_of(*sim, pass);  // untimed, once: every iteration runs the same step
     for (const std::string& earlier : order) {  // untimed: the inputs this pass sees in a step
       if (earlier == pass) break;
       if (earlier != "topology_apply") sim->run_pass(earlier);
@@ -60,6 +78,10 @@ void BM_Pass(benchmark::State& state, const std::string& backend, int threads, i
   }
   state.counters["ms_per_pass"] = state.iterations() ? 1e3 * seconds / double(state.iterations()) : 0.0;
   state.counters["vertices"] = base->totals().vertices;
+  if (bytes > 0) {
+    state.counters["bytes"] = bytes;
+    state.counters["bytes_per_second"] = benchmark::Counter(bytes * double(state.iterations()), benchmark::Counter::kIsRate);
+  }
 }
 
 void register_pass_benchmarks() {

@@ -4,7 +4,8 @@
 #   frame.json      Google Benchmark JSON (every repetition, plus aggregates)
 #   run.json        the machine and how the run was made
 #   REPORT.md       machine, command, table, largest sheet at 60/30 fps, charts
-#   frame_time.png  frame time against vertex count; speedup.png; passes.png (if BM_Pass/ ran)
+#   frame_time.png  frame time against vertex count; speedup.png; passes.png (if BM_Pass/ ran);
+#                   roofline.png (the passes' GB/s against BM_Stream's measured bandwidth)
 # and copies frame_time.png to results/frame_time.png (the README's chart).
 #
 # Usage: scripts/bench.sh [--quick] [--out DIR] [-- extra crumple_bench flags]
@@ -25,7 +26,7 @@ while (($#)); do
     --quick) quick=1 ;;
     --out) out=$2; shift ;;
     --) shift; extra=("$@"); break ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "bench.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift

@@ -10,6 +10,8 @@ adds are recomputed here from the repetitions), and writes to DIR (default: the 
   speedup.png     speed-up of each step reference -> <backend> 1 thread -> 2 threads ... per N
                   (drawn when at least two crumple configurations exist)
   passes.png      per-pass breakdown, only when BM_Pass/<pass>/<backend>/<threads>/<N> exist
+  roofline.png    each pass's achieved GB/s (bytes counted from the layout over its time)
+                  against BM_Stream's measured bandwidth, when both exist
   REPORT.md       machine, how it was run, table, largest sheet within 60/30 fps, the charts
 --headline also copies frame_time.png there (results/frame_time.png, shown by the README).
 """
@@ -30,6 +32,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
+STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
+EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
 PEERS = {"bullet"}  # different methods: charted, never part of the speed-up chain
@@ -256,6 +260,143 @@ def chart_passes(passes, machine, path):
     return True
 
 
+def stream_bandwidth(benches):
+    """{threads: {kernel: median GB/s}} from BM_Stream's bytes_per_second."""
+    out = {}
+    for name, b in benches.items():
+        m = STREAM.match(name)
+        if m and b.times:
+            out.setdefault(int(m["threads"]), {})[m["kernel"]] = b.counter("bytes_per_second") / 1e9
+    return out
+
+
+def roof(stream, threads):
+    """The bandwidth a pass on `threads` threads is set against: the best STREAM kernel there."""
+    kernels = stream.get(threads, {})
+    return max(kernels.values()) if kernels else float("nan")
+
+
+PASS_ORDER = ["normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply", "layout"]
+
+
+def pass_rank(name):
+    """A step's order for the fast passes, others after them by name."""
+    return (PASS_ORDER.index(name), "") if name in PASS_ORDER else (len(PASS_ORDER), name)
+
+
+def pass_bytes_rows(benches):
+    """(key, n, pass, median ms, bytes) for BM_Pass benchmarks that count their bytes."""
+    rows = []
+    for name, b in benches.items():
+        m = PASS.match(name)
+        if m and b.times and math.isfinite(b.counter("bytes")):
+            rows.append((config_key(m["backend"], m["threads"]), int(m["n"]), m["pass"], b.median(), b.counter("bytes")))
+    keys = order_configs({r[0] for r in rows})
+    return sorted(rows, key=lambda r: (keys.index(r[0]), r[1], pass_rank(r[2])))
+
+
+def chart_roofline(rows, stream, machine, path):
+    if not rows or not stream:
+        return False
+    sizes = sorted({r[1] for r in rows})
+    keys = order_configs({r[0] for r in rows})
+    passes = sorted({r[2] for r in rows}, key=pass_rank)
+    fig, axes = plt.subplots(1, len(sizes), figsize=(max(6, 5.5 * len(sizes)), 5), squeeze=False, sharey=True)
+    width = 0.8 / len(keys)
+    for ax, n in zip(axes[0], sizes):
+        for i, key in enumerate(keys):
+            gbs = {p: b / (ms * 1e-3) / 1e9 for k, nn, p, ms, b in rows if k == key and nn == n}
+            xs = [j + (i - (len(keys) - 1) / 2) * width for j, p in enumerate(passes) if p in gbs]
+            ax.bar(xs, [gbs[p] for p in passes if p in gbs], width * 0.95, label=short(key))
+        for threads, style in zip(sorted(stream), ["--", ":", "-."]):
+            ax.axhline(roof(stream, threads), color="0.25", linestyle=style, linewidth=1.2,
+                       label=f"STREAM best, {threads}t ({roof(stream, threads):.1f} GB/s)")
+        ax.set_xticks(range(len(passes)))
+        ax.set_xticklabels(passes, rotation=30, ha="right", fontsize=8)
+        ax.set_title(f"N={n}", fontsize=10)
+        ax.grid(True, axis="y", alpha=0.3)
+    axes[0][0].set_ylabel("achieved GB/s (counted bytes / median time)")
+    axes[0][-1].legend(fontsize=8)
+    fig.suptitle(f"crumple: each pass against the measured memory bandwidth\n{machine}", fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return True
+
+
+def roofline_section(benches, charts):
+    stream = stream_bandwidth(benches)
+    rows = pass_bytes_rows(benches)
+    frozen = [(k, n, b) for k, per_n in frame_series(benches, FROZEN).items() for n, b in per_n.items()
+              if math.isfinite(b.counter("bytes"))]
+    if not stream and not rows and not frozen:
+        return []
+    lines = ["## Roofline: the passes against the memory bandwidth", "",
+             "`BM_Stream/<kernel>/<threads>/<MiB>` streams arrays of doubles four times the L3 (read: sum; copy; "
+             "triad: a = b + q c; bytes as STREAM counts them, without the write-allocate read). Each fast pass's "
+             "bytes are counted from the layout (`bench/bytes_moved.cpp`: every array it reads or writes, element "
+             "count times element size, data read through indices once per distinct element, adjacency rows at "
+             "their full stride; topology_apply adds 64 bytes per line of the rows each event touches), so "
+             "bytes / time is the bandwidth the pass achieves. It is set against the best STREAM kernel on the "
+             "same thread count: a pass near it is memory-bound at its layout's traffic, one far below it is bound "
+             "by something else (latency of scattered reads, compute, serial work).", ""]
+    if stream:
+        kernels = sorted({k for per_t in stream.values() for k in per_t})
+        lines += ["| threads | " + " | ".join(f"{k} GB/s" for k in kernels) + " |",
+                  "|---:|" + "---:|" * len(kernels)]
+        for threads in sorted(stream):
+            lines.append(f"| {threads} | " + " | ".join(f"{stream[threads].get(k, float('nan')):.1f}" for k in kernels) + " |")
+        lines.append("")
+    if "roofline.png" in charts:
+        lines += ["![each pass against the measured bandwidth](roofline.png)", ""]
+    if rows:
+        lines += ["| configuration | N | pass | MB moved | median ms | GB/s | of STREAM |", "|---|---:|---|---:|---:|---:|---:|"]
+        for key, n, p, ms, b in rows:
+            gbs = b / (ms * 1e-3) / 1e9
+            share = 100.0 * gbs / roof(stream, key[1])
+            lines.append(f"| {short(key)} | {n} | {p} | {b / 1e6:.1f} | {fmt_ms(ms)} | {gbs:.1f} | "
+                         f"{f'{share:.0f} %' if math.isfinite(share) else '-'} |")
+        lines.append("")
+    if frozen:
+        lines += ["The frozen step (`BM_Frozen`: normals, edge_forces, gather, integrate on the prepared mesh) against "
+                  "its bandwidth floor, the time its counted bytes take at the best STREAM bandwidth on its thread count:", "",
+                  "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex |",
+                  "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        keys = order_configs({r[0] for r in frozen})
+        for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
+            ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
+            floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
+            bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
+            lines.append(f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {bound} | "
+                         f"{by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
+        lines.append("")
+    return lines
+
+
+def events_section(benches):
+    rows = []
+    for name, b in benches.items():
+        m = EVENTS.match(name)
+        if m and b.times:
+            rows.append((config_key(m["backend"], m["threads"]), int(m["n"]), b))
+    if not rows:
+        return []
+    lines = ["## Events applied as a batch", "",
+             "`BM_Events/<backend>/<threads>/<N>` applies the splits and restores of one recorded step of the "
+             "prepared state (the adapt pass minus its test alone on a twin of the same state, bench/bench_events.cpp), "
+             "per event; no relayout. Median over repetitions of the per-iteration time, and the ratio of the summed "
+             "times (`us_per_event`).", "",
+             "| configuration | N | splits | restores | us per event (median) | us per event (sums) |",
+             "|---|---:|---:|---:|---:|---:|"]
+    keys = order_configs({r[0] for r in rows})
+    for key, n, b in sorted(rows, key=lambda r: (keys.index(r[0]), r[1])):
+        other = " (**iterations applied another batch**)" if any(v > 0 for v in b.counters.get("mismatch", [])) else ""
+        lines.append(f"| {short(key)} | {n} | {b.counter('splits'):,.0f} | {b.counter('restores'):,.0f} | "
+                     f"{1000.0 * b.median():.2f} | {b.counter('us_per_event'):.2f}{other} |")
+    lines.append("")
+    return lines
+
+
 def largest_within(series_for_config, budget_ms):
     fits = [(n, b) for n, b in series_for_config.items() if b.median() <= budget_ms]
     if not fits:
@@ -412,6 +553,8 @@ def report(json_path, run, context, benches, out_dir, charts):
         lines.append("Only one crumple configuration was measured; no speed-up to show.")
     lines.append("")
     lines += event_cost_section(series, frame_series(benches, FROZEN))
+    lines += events_section(benches)
+    lines += roofline_section(benches, charts)
     if "passes.png" in charts:
         lines.append("## Time per pass")
         lines.append("")
@@ -464,6 +607,8 @@ def main():
         charts.append("speedup.png")
     if chart_passes(pass_series(benches), machine, os.path.join(out, "passes.png")):
         charts.append("passes.png")
+    if chart_roofline(pass_bytes_rows(benches), stream_bandwidth(benches), machine, os.path.join(out, "roofline.png")):
+        charts.append("roofline.png")
     text = report(args.json, run, context, benches, out, charts)
     with open(os.path.join(out, "REPORT.md"), "w") as f:
         f.write(text + "\n")

@@ -1,0 +1,119 @@
+#include "bytes_moved.h"
+
+#include <cmath>
+
+#include "fast/fast_sim.h"
+
+namespace crumple::bench {
+
+namespace {
+// Element sizes of the layout (topology.h). The asserts make a layout change fail here, where
+// the formulas below must then be revisited, rather than silently miscount.
+constexpr double kF = 4, kI = 4, kU8 = 1, kU16 = 2;  // float, int32 id, flag byte, list count
+constexpr double kF4 = 16, kOut = 64;                // Float4 (g, area), EdgeOut record
+static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut);
+constexpr double kLine = 64;
+
+double list_row(int stride) { return kI * stride; }  ///< one vertex's fixed-stride adjacency row
+double list_lines(int stride) { return std::ceil(list_row(stride) / kLine); }
+
+// triangle_areas: per triangle slot its corners v0..v2 and alive in, its area vector out; the
+// corners' positions x, y, z once per vertex.
+// vertex_normals: per vertex its triangle row and count, the normal n out; each area once.
+double normals(const LayoutSizes& s) {
+  const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * 3 * kF;
+  const double sums = s.vertices * (list_row(s.stride_t) + kU16 + 3 * kF) + s.triangles * kF4;
+  return areas + sums;
+}
+
+// Per edge slot a, b, wl, wr, l0, flags in and the 64-byte EdgeOut out; per vertex (endpoints
+// and wings, each once) m, x, v, n.
+double edge_forces(const LayoutSizes& s) {
+  return s.edges * (4 * kI + kF + kU8 + kOut) + s.vertices * (kF + 9 * kF);
+}
+
+// Per vertex its spring and wing rows and both counts, m, n, v in, f, ksum and g out; every
+// EdgeOut record once.
+double gather(const LayoutSizes& s) {
+  const double per_vertex = list_row(s.stride_e) + list_row(s.stride_t) + 2 * kU16 + (kF + 6 * kF) + 4 * kF + kF4;
+  return s.vertices * per_vertex + s.edges * kOut;
+}
+
+// Per sweep and vertex: its neighbour row and count, m, ksum, v, f in, each neighbour's guess g
+// once (the vertex's own g among them), g_next out. Then momentum_drift (m, g, v, f in), the
+// total mass (m in) and advance (m, g, x, v in; x, v out).
+double integrate(const LayoutSizes& s, int sweeps) {
+  const double sweep = s.vertices * (list_row(s.stride_e) + kU16 + 2 * kF + 6 * kF + kF4 + kF4);
+  const double drift = s.vertices * (kF + kF4 + 6 * kF);
+  const double mass = s.vertices * kF;
+  const double advance = s.vertices * (kF + kF4 + 6 * kF + 6 * kF);
+  return sweeps * sweep + drift + mass + advance;
+}
+
+// The normals on the new positions, then per edge slot a, b, wl, wr, l0, flags, record, lid in
+// and one decision byte out; per vertex x and n once.
+double adapt_test(const LayoutSizes& s) {
+  return normals(s) + s.edges * (4 * kI + kF + kU8 + kI + kI + kU8) + s.vertices * 6 * kF;
+}
+
+// Lines of one element's row, each array's entry on its own line (random access in SoA): a
+// vertex's 14 floats x, v, m, n, f, ksum, its g, g_next, rest position (3), counts (2),
+// lid, phys, and its four adjacency rows; an edge's 12 arrays; a triangle's 10.
+double vertex_lines(const LayoutSizes& s) { return 23 + 2 * list_lines(s.stride_e) + 2 * list_lines(s.stride_t); }
+constexpr double kEdgeLines = 12, kTriangleLines = 10;
+constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
+
+// One split or restore touches the five vertices n, i, j, l, r, the five edges e, e_in, e_nj,
+// e_ln, e_nr, the four triangles of the split record, and the record: every line of their rows.
+// (An estimate of the lines an event brings in, not a floor: an edit reads only part of a row.)
+double event(const LayoutSizes& s) {
+  return kLine * (5 * vertex_lines(s) + 5 * kEdgeLines + 4 * kTriangleLines + kRecordLines);
+}
+
+// adapt_test, then the two scans of one byte per edge that collect the events in id order
+// (decisions, then the per-id copy), then the events themselves.
+double topology_apply(const LayoutSizes& s, double events) {
+  return adapt_test(s) + s.edges * 2 * kU8 + events * event(s);
+}
+
+// relayout reads every array of every element and writes it permuted: twice the whole state.
+double layout(const LayoutSizes& s) {
+  const double vertex = 14 * kF + 2 * kF4 + 3 * kF + 2 * kU16 + 2 * kI + 2 * list_row(s.stride_e) + 2 * list_row(s.stride_t);
+  const double edge = 6 * kI + kF + kU8 + kI + kOut + 2 * kI;
+  const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
+  return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
+}
+}  // namespace
+
+LayoutSizes layout_sizes(const fast::Topology& m) {
+  LayoutSizes s;
+  s.vertices = m.V.size();
+  s.edges = m.E.size();
+  s.triangles = m.T.size();
+  s.stride_e = m.V.stride_e;
+  s.stride_t = m.V.stride_t;
+  return s;
+}
+
+std::optional<LayoutSizes> layout_sizes(const Simulator& sim) {
+  const auto* fast = dynamic_cast<const fast::FastSimulator*>(&sim);
+  if (!fast) return std::nullopt;
+  return layout_sizes(fast->topology());
+}
+
+double pass_bytes(const std::string& pass, const LayoutSizes& s, int sweeps, double events) {
+  if (pass == "normals") return normals(s);
+  if (pass == "edge_forces") return edge_forces(s);
+  if (pass == "gather") return gather(s);
+  if (pass == "integrate") return integrate(s, sweeps);
+  if (pass == "adapt_test") return adapt_test(s);
+  if (pass == "topology_apply") return topology_apply(s, events);
+  if (pass == "layout") return layout(s);
+  return 0;
+}
+
+double frozen_step_bytes(const LayoutSizes& s, int sweeps) {
+  return normals(s) + edge_forces(s) + gather(s) + integrate(s, sweeps);
+}
+
+}  // namespace crumple::bench

@@ -1,0 +1,59 @@
+// bench/bytes_moved.h on a known small state: the 4 x 4 grid (16 vertices, 33 edges: 12 + 12
+// sides and 9 diagonals, 18 triangles, adjacency strides 16), whose counts are worked out here
+// by hand from the formulas of bytes_moved.cpp. A formula that counts an array twice (the
+// EdgeOut records once per list entry rather than once per edge, say), drops one (the
+// neighbours' guesses in a sweep), or ignores the sweep count, gives another number.
+#include <gtest/gtest.h>
+
+#include "bytes_moved.h"
+#include "fast/fast_sim.h"
+#include "mesh/input_mesh.h"
+
+namespace crumple::bench {
+namespace {
+
+LayoutSizes grid4() {
+  const fast::FastSimulator sim(make_grid(4), Params{}, 1);
+  return layout_sizes(sim.topology());
+}
+
+TEST(BytesMoved, SizesOfTheGrid) {
+  const LayoutSizes s = grid4();
+  EXPECT_EQ(s.vertices, 16);
+  EXPECT_EQ(s.edges, 33);
+  EXPECT_EQ(s.triangles, 18);
+  EXPECT_EQ(s.stride_e, 16);
+  EXPECT_EQ(s.stride_t, 16);
+}
+
+TEST(BytesMoved, PassesOfTheGridByHand) {
+  const LayoutSizes s = grid4();
+  // normals: 18 (12 + 1 + 16) + 16 * 12 for the areas; 16 (64 + 2 + 12) + 18 * 16 for the sums.
+  EXPECT_EQ(pass_bytes("normals", s, 1, 0), 522 + 192 + 1248 + 288);
+  // edge_forces: 33 (16 + 4 + 1 + 64) + 16 * 40.
+  EXPECT_EQ(pass_bytes("edge_forces", s, 1, 0), 2805 + 640);
+  // gather: 16 (64 + 64 + 4 + 28 + 16 + 16) + 33 * 64.
+  EXPECT_EQ(pass_bytes("gather", s, 1, 0), 3072 + 2112);
+  // integrate, one sweep: 16 (64 + 2 + 8 + 24 + 16 + 16); drift 16 * 44; mass 16 * 4; advance 16 * 68.
+  EXPECT_EQ(pass_bytes("integrate", s, 1, 0), 2080 + 704 + 64 + 1088);
+  EXPECT_EQ(pass_bytes("integrate", s, 3, 0) - pass_bytes("integrate", s, 1, 0), 2 * 2080);
+  // adapt_test: the normals, 33 * 30 and 16 * 24.
+  EXPECT_EQ(pass_bytes("adapt_test", s, 1, 0), 2250 + 990 + 384);
+  EXPECT_EQ(pass_bytes("no_such_pass", s, 1, 0), 0);
+}
+
+TEST(BytesMoved, FrozenStepIsItsFourPasses) {
+  const LayoutSizes s = grid4();
+  EXPECT_EQ(frozen_step_bytes(s, 1), 2250 + 3445 + 5184 + 3936);
+}
+
+TEST(BytesMoved, EventsCountTheLinesOfTheirRows) {
+  const LayoutSizes s = grid4();
+  // 5 vertices of 23 + 4 lines, 5 edges of 12, 4 triangles of 10, a 128-byte record: 237 lines.
+  const double per_event = 64 * (5 * 27 + 5 * 12 + 4 * 10 + 2);
+  EXPECT_EQ(pass_bytes("topology_apply", s, 1, 0), pass_bytes("adapt_test", s, 1, 0) + 2 * 33);
+  EXPECT_EQ(pass_bytes("topology_apply", s, 1, 3) - pass_bytes("topology_apply", s, 1, 0), 3 * per_event);
+}
+
+}  // namespace
+}  // namespace crumple::bench
