@@ -109,15 +109,21 @@ def stage_calibrate(runner, quick, sizes=None, substeps=64):
     result = load_result().get("calibrate", {})
     result.setdefault("sizes", {})
     for n in sizes:
-        lines = [paper(n, s) for s in seeds]
-        lines += [viscous(n, s, c, substeps) for c in cs for s in seeds]
-        runs = runner.run(lines)
-        k = len(seeds)
-        entry = {"paper": summary(runs[:k]), "viscous": {}, "substeps": substeps}
-        for i, c in enumerate(cs):
-            entry["viscous"][f"{c:g}"] = summary(runs[k * (i + 1):k * (i + 2)])
-        result["sizes"][f"{n}/S{substeps}"] = entry
-        print_calibration(n, entry)
+        groups = [("paper", [paper(n, s) for s in seeds])]
+        groups += [(f"{c:g}", [viscous(n, s, c, substeps) for s in seeds]) for c in cs]
+        entry = {"viscous": {}, "substeps": substeps}
+        for name, lines in groups:
+            try:
+                summ = summary(runner.run(lines))
+            except LookupError:  # --cached-only: what was run
+                continue
+            if name == "paper":
+                entry["paper"] = summ
+            else:
+                entry["viscous"][name] = summ
+        if "paper" in entry and entry["viscous"]:
+            result["sizes"][f"{n}/S{substeps}"] = entry
+            print_calibration(n, entry)
     return result
 
 
@@ -175,7 +181,8 @@ def stage_converge(runner, quick, only=None):
             if entry["converged_at"] is not None and S >= finest:
                 break
             prev = cur
-        result["cases"][label] = entry
+        if entry["levels"]:
+            result["cases"][label] = entry
     return result
 
 
@@ -248,7 +255,7 @@ def chart_convergence(data, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    cases = data["converge"]["cases"]
+    cases = {k: c for k, c in data["converge"]["cases"].items() if c["levels"]}
     fig, axes = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
     for ax, (label, case) in zip(axes[0], cases.items()):
         levels = sorted(case["levels"], key=int)
