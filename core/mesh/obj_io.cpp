@@ -37,6 +37,10 @@ struct ObjLayout {
   std::vector<int> vertex_line;    // line of each 'v' element, in file order
   std::vector<int> face_line;      // line of each 'f' element, in file order
   std::vector<int> vertices_before;  // number of 'v' elements above each face (relative indices)
+  // What tinyobjloader gets: the 'v', 'vt', 'vn' and 'f' lines, every other line blank (line
+  // numbers kept). Its readers of other elements convert unchecked numbers to int ('vw' joint
+  // ids: undefined behaviour, found by fuzzing) or size vectors from them ('t' tags).
+  std::string geometry;
 };
 
 // One face as tinyobjloader resolved it.
@@ -150,7 +154,12 @@ ObjLayout scan_layout(const std::string& text, const std::string& path) {
     s = s.substr(0, s.find('\0'));  // tinyobjloader reads a line as a C string
     const std::size_t first = std::min(s.find_first_not_of(" \t"), s.size());
     s.remove_prefix(first);
-    if (s.size() < 2 || (s[1] != ' ' && s[1] != '\t')) continue;
+    const bool element = s.size() >= 2 && (s[1] == ' ' || s[1] == '\t');
+    const bool texture_or_normal =
+        s.size() >= 3 && s[0] == 'v' && (s[1] == 't' || s[1] == 'n') && (s[2] == ' ' || s[2] == '\t');
+    if ((element && (s[0] == 'v' || s[0] == 'f')) || texture_or_normal) layout.geometry += s;
+    layout.geometry += '\n';
+    if (!element) continue;
     if (s[0] == 'v') {
       layout.vertex_line.push_back(line);
       layout.vertex_position.push_back(
@@ -309,12 +318,12 @@ bool split_polygon(const std::vector<int>& c, const std::vector<Vec3>& pos,
 }
 
 // The faces as tinyobjloader reads them, matched to the file's lines.
-std::vector<Face> read_faces(const std::string& text, const ObjLayout& layout, const std::string& path) {
+std::vector<Face> read_faces(const ObjLayout& layout, const std::string& path) {
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
   std::string warn, err;
-  std::istringstream stream(text);
+  std::istringstream stream(layout.geometry);
   // No material reader (materials are not needed), no triangulation, no default colors.
   if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &stream, nullptr, false, false)) {
     fail_tinyobj(path, err);
@@ -337,7 +346,7 @@ InputMesh parse_obj(std::string text, const std::string& path) {
   // A UTF-8 byte-order mark is not part of the first line (tinyobjloader would skip that line).
   if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text = text.substr(3);
   const ObjLayout layout = scan_layout(text, path);
-  const std::vector<Face> faces = read_faces(text, layout, path);
+  const std::vector<Face> faces = read_faces(layout, path);
   const std::vector<Vec3>& positions = layout.vertex_position;
 
   // Triangles (original vertex indices) and the line each came from.
