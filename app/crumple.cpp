@@ -2,7 +2,9 @@
 #include <CLI/CLI.hpp>
 #include <charconv>
 #include <cstdint>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <map>
 
 #include "run_command.h"
@@ -93,5 +95,9 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return cli.exit(e);  // --help
     return app::fail(app::kBadInput, e.what());
   }
-  return app::run(o);
+  const int code = app::run(o);
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {  // the summary line was lost (e.g. >/dev/full)
+    return app::fail(app::kBadInput, std::string("cannot write to standard output: ") + std::strerror(errno));
+  }
+  return code;
 }

@@ -94,6 +94,16 @@ TEST(CliOut, PlantedSymbolicLinksAreReplacedNotFollowed) {
   fs::remove(victim);
 }
 
+// Catches: an unchecked standard output (before: the summary line was lost, exit 0).
+TEST(CliOut, LostSummaryLineExitsTwo) {
+  const fs::path err = fresh_dir("full_err");
+  const std::string cmd = std::string(CRUMPLE_EXE) + " run --grid 4 --frames 1 >/dev/full 2>" + err.string();
+  const int status = std::system(cmd.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_NE(read_all(err).find("crumple: error: cannot write to standard output"), std::string::npos) << read_all(err);
+  fs::remove(err);
+}
+
 // Starts crumple with `args` and returns its pid; stderr goes to `err`.
 pid_t start(const std::string& args, const fs::path& err) {
   const pid_t pid = ::fork();
