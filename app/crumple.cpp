@@ -77,6 +77,8 @@ int main(int argc, char** argv) {
       ->transform(choice<BendingForm>({{"balanced", BendingForm::Balanced}, {"paper", BendingForm::Paper}}));
   run->add_flag("!--no-fracture", p.fracture, "turn the stochastic fracture off");
   run->add_flag("!--no-restoration", p.restoration, "turn restoration off");
+  run->add_option("--max-vertices", p.max_vertices, "vertex budget: no split beyond it (0: unlimited)")
+      ->capture_default_str();
   run->add_option("--sphere-start", p.sphere_start, "R0 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-end", p.sphere_end, "R1 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-time", p.sphere_time, "seconds to shrink from R0 to R1")->capture_default_str();

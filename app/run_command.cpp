@@ -144,6 +144,10 @@ int run_checked(const RunOptions& o) {
     return fail(kBadInput, e.what());
   }
   if (std::string m = check_memory(o, mesh.positions.size()); !m.empty()) return fail(kBadInput, m);
+  if (o.params.max_vertices > 0 && std::size_t(o.params.max_vertices) < mesh.positions.size()) {
+    return fail(kBadInput, "--max-vertices " + std::to_string(o.params.max_vertices) + " is below the mesh's " +
+                               std::to_string(mesh.positions.size()) + " vertices");
+  }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
   std::unique_ptr<Simulator> sim;
   try {
