@@ -5,7 +5,9 @@
 # code is instrumented too), seeds from tests/fuzz/corpus and tests/data, keeps the growing
 # corpus in <build-dir>/corpus, and writes findings to <build-dir>/findings (copy each one into
 # tests/fuzz/crashes, named after what it found, once fixed). Limits: 10 s per input (a hang),
-# 2048 MB resident (an allocation the input does not justify), inputs up to 64 KiB.
+# 2048 MB resident (an allocation the input does not justify), inputs up to 64 KiB. Runs in
+# libFuzzer's fork mode with timeouts recorded but not fatal: on a loaded machine a wall-clock
+# timeout is often the machine, so re-time each timeout-* finding alone before calling it a hang.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 seconds=${1:?usage: scripts/fuzz.sh SECONDS [build-dir]}
@@ -19,6 +21,6 @@ if [ ! -x "$build/fuzz_obj" ] || [ -n "$(find "${src[@]}" "$root"/core/mesh/*.h 
     -I"$root/core" "${src[@]}" -o "$build/fuzz_obj"
 fi
 cd "$build"
-exec ./fuzz_obj -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
+exec ./fuzz_obj -fork=1 -ignore_timeouts=1 -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=65536 \
   -artifact_prefix="$build/findings/" -print_final_stats=1 \
   corpus "$root/tests/fuzz/corpus" "$root/tests/data"

@@ -2,6 +2,9 @@
 // output folder.
 #include <sys/stat.h>
 
+#include <initializer_list>
+#include <utility>
+
 #include "cli_support.h"
 
 namespace {
@@ -25,16 +28,21 @@ TEST(Cli, RunWritesStatsAndFinalObj) {
   EXPECT_FALSE(fs::exists(d / "frame_00015.obj"));
 }
 
+// Each command line exits 2 with one error line naming what it pairs with.
+void expect_rejected(std::initializer_list<std::pair<const char*, const char*>> cases) {
+  for (const auto& [args, what] : cases) expect_error(crumple(args), 2, what);
+}
+
 TEST(Cli, BadArgumentsExitTwoWithOneLine) {
-  expect_error(crumple("run --grid 1"), 2, "--grid");
-  expect_error(crumple("run --phi 1.5"), 2, "--phi");
-  expect_error(crumple("run --kappa nan"), 2, "--kappa");
-  expect_error(crumple("run --integrator magic"), 2, "--integrator");
-  expect_error(crumple("run --frames 0"), 2, "--frames");
-  expect_error(crumple("run --varphi 0.5"), 2, "--varphi");
-  expect_error(crumple("run --no-such-option"), 2, "no-such-option");
-  expect_error(crumple("run --grid 8 --mesh x.obj"), 2, "excludes");
-  expect_error(crumple("run --backend nope"), 2, "--backend");
+  expect_rejected({{"run --grid 1", "--grid"},
+                   {"run --phi 1.5", "--phi"},
+                   {"run --kappa nan", "--kappa"},
+                   {"run --integrator magic", "--integrator"},
+                   {"run --frames 0", "--frames"},
+                   {"run --varphi 0.5", "--varphi"},
+                   {"run --no-such-option", "no-such-option"},
+                   {"run --grid 8 --mesh x.obj", "excludes"},
+                   {"run --backend nope", "--backend"}});
 }
 
 TEST(Cli, BadFilesExitTwoAndWriteNothing) {
@@ -63,12 +71,12 @@ TEST(Cli, UnstableRunExitsThreeNamingTheFrame) {
 // Catches: CLI11 converting '' to 0 / "not given" (before: --kappa '' ran with kappa 0, --mesh ''
 // the default grid) and strtoull wrapping seeds (-1 and 2^64 both became 2^64-1).
 TEST(Cli, EmptyValuesAndOutOfRangeSeedsAreRejected) {
-  expect_error(crumple("run --mesh ''"), 2, "--mesh");
-  expect_error(crumple("run --kappa ''"), 2, "--kappa");
-  expect_error(crumple("run --out ''"), 2, "--out");
-  expect_error(crumple("run --seed -1"), 2, "--seed");
-  expect_error(crumple("run --seed 18446744073709551616"), 2, "--seed");
-  expect_error(crumple("run --seed 1x"), 2, "--seed");
+  expect_rejected({{"run --mesh ''", "--mesh"},
+                   {"run --kappa ''", "--kappa"},
+                   {"run --out ''", "--out"},
+                   {"run --seed -1", "--seed"},
+                   {"run --seed 18446744073709551616", "--seed"},
+                   {"run --seed 1x", "--seed"}});
   EXPECT_EQ(crumple("run --grid 4 --frames 1 --quiet --seed 18446744073709551615").code, 0);
 }
 

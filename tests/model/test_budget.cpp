@@ -9,14 +9,9 @@ namespace {
 
 class Budget : public EachBackend {};
 
-// A free sheet squeezed to 60 %, easy to break and restore: it grows fast and churns.
+// churn_params (a squeezed free sheet that grows fast and churns) with a vertex budget.
 Params churning(int max_vertices) {
-  Params p;
-  p.scene = Scene::Free;
-  p.squeeze = 0.6;
-  p.phi = 0.2;
-  p.epsilon = 0.15;
-  p.floor = 0.05;
+  Params p = churn_params();
   p.max_vertices = max_vertices;
   return p;
 }
