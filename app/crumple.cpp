@@ -1,7 +1,10 @@
 // The `crumple` command: parses options (CLI11) and dispatches to the run command.
 #include <CLI/CLI.hpp>
 #include <charconv>
+#include <cstdint>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <map>
 
 #include "crumple/crumple.h"
@@ -15,6 +18,20 @@ template <class E>
 CLI::Transformer choice(const std::map<std::string, E>& names) {
   return CLI::Transformer(names, CLI::ignore_case);
 }
+
+// An empty value would otherwise convert to 0 (numbers) or mean "not given" (--mesh, --out).
+const CLI::Validator kNotEmpty(
+    [](std::string& value) { return value.empty() ? std::string("the value is empty") : std::string(); }, "");
+
+// Digits only, within 64 bits: strtoull, under CLI11, wraps "-1" and saturates 2^64.
+const CLI::Validator kSeed(
+    [](std::string& value) {
+      std::uint64_t seed = 0;
+      const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), seed);
+      const bool ok = !value.empty() && value[0] != '-' && ec == std::errc() && end == value.data() + value.size();
+      return ok ? std::string() : std::string("must be an integer in [0, 18446744073709551615]");
+    },
+    "");
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -60,7 +77,7 @@ int main(int argc, char** argv) {
   run->add_option("--cg-tolerance", p.cg_tolerance, "implicit: CG relative tolerance")->capture_default_str();
   run->add_option("--backend", o.backend, "backend")->check(CLI::IsMember(backend_names()))->capture_default_str();
   run->add_option("--threads", o.threads, "worker threads")->capture_default_str();
-  run->add_option("--seed", p.seed, "seed of the random stream")->capture_default_str();
+  run->add_option("--seed", p.seed, "seed of the random stream")->check(kSeed)->capture_default_str();
   run->add_option("--kappa", p.kappa, "stiffness per unit mass [Eq 5]")->capture_default_str();
   run->add_option("--bend", p.bend, "bending coefficient per unit mass [Eq 9]")->capture_default_str();
   run->add_option("--damping", p.damping, "spring damping per unit mass")->capture_default_str();
@@ -80,19 +97,29 @@ int main(int argc, char** argv) {
       ->transform(choice<BendingForm>({{"balanced", BendingForm::Balanced}, {"paper", BendingForm::Paper}}));
   run->add_flag("!--no-fracture", p.fracture, "turn the stochastic fracture off");
   run->add_flag("!--no-restoration", p.restoration, "turn restoration off");
+  run->add_option("--max-vertices", p.max_vertices, "vertex budget: no split beyond it (0: unlimited)")
+      ->capture_default_str();
   run->add_option("--sphere-start", p.sphere_start, "R0 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-end", p.sphere_end, "R1 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-time", p.sphere_time, "seconds to shrink from R0 to R1")->capture_default_str();
   run->add_option("--out", o.out, "output folder: stats.csv, final.obj");
+  run->add_flag("--force", o.force, "--out may be a non-empty folder: replace crumple's files in it");
   run->add_option("--every", o.every, "also write every K-th frame as frame_NNNNN.obj")->capture_default_str();
   run->add_flag("--quiet", o.quiet, "no progress bar and no summary");
+
+  for (CLI::Option* option : run->get_options()) {
+    if (option->get_type_size() > 0) option->check(kNotEmpty);
+  }
 
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return cli.exit(e);  // --help, --version
-    std::fprintf(stderr, "crumple: error: %s\n", e.what());
-    return app::kBadInput;
+    return app::fail(app::kBadInput, e.what());
   }
-  return app::run(o);
+  const int code = app::run(o);
+  if (std::fflush(stdout) != 0 || std::ferror(stdout)) {  // the summary line was lost (e.g. >/dev/full)
+    return app::fail(app::kBadInput, std::string("cannot write to standard output: ") + std::strerror(errno));
+  }
+  return code;
 }

@@ -3,12 +3,18 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <memory>
+#include <new>
+#include <optional>
 #include <oneapi/tbb/global_control.h>
 
+#include "interrupt.h"
+#include "memory.h"
 #include "mesh/input_mesh.h"
+#include "output.h"
 #include "sim/backends.h"
 #include "sim/run.h"
 
@@ -17,11 +23,6 @@ namespace crumple::app {
 namespace fs = std::filesystem;
 
 namespace {
-
-int fail(int code, const std::string& message) {
-  std::fprintf(stderr, "crumple: error: %s\n", message.c_str());
-  return code;
-}
 
 // A one-line progress bar on stderr, only on a terminal and only once a run passes a second.
 class Progress {
@@ -48,83 +49,165 @@ class Progress {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
 
-}  // namespace
+// Empty if the command's own options are valid (Params::validate checks the model's).
+std::string check_options(const RunOptions& o) {
+  if (std::string m = o.params.validate(); !m.empty()) return m;
+  if (o.frames < 1 || o.frames > 10000000) return "--frames must be in [1, 10000000]";
+  if (o.threads < 1 || o.threads > 256) return "--threads must be in [1, 256]";
+  if (o.every < 0) return "--every must be >= 0";
+  if (o.mesh.empty() && (o.grid < 2 || o.grid > 8192)) return "--grid must be in [2, 8192]";
+  return {};
+}
 
-int run(const RunOptions& o) {
-  // Validate everything before anything is written.
-  if (std::string m = o.params.validate(); !m.empty()) return fail(kBadInput, m);
-  if (o.frames < 1 || o.frames > 10000000) return fail(kBadInput, "--frames must be in [1, 10000000]");
-  if (o.threads < 1 || o.threads > 256) return fail(kBadInput, "--threads must be in [1, 256]");
-  if (o.every < 0) return fail(kBadInput, "--every must be >= 0");
-  if (o.mesh.empty() && (o.grid < 2 || o.grid > 8192)) return fail(kBadInput, "--grid must be in [2, 8192]");
+// Empty if the run fits in the memory this process may take; otherwise why not.
+std::string check_memory(const RunOptions& o, std::size_t vertices) {
+  const std::uint64_t need = estimate_run_bytes(o.backend, vertices), have = available_bytes();
+  if (need <= have) return {};
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "the run needs about %.2f GB of memory (%zu vertices, %s backend, room to refine) but "
+                "%.2f GB are available",
+                need * 1e-9, vertices, o.backend.c_str(), have * 1e-9);
+  return text;
+}
 
+// What the frame loop ended with.
+struct Outcome {
+  int frames_done = 0;
+  int code = kOk;        // kOk, kUnstable, or 128 + the signal
+  std::string why;       // the instability
+  long splits = 0, restores = 0;
+  double total_ms = 0;
+};
+
+// Writes the simulator's current state to dir/name, complete or not at all.
+void write_frame(const fs::path& dir, const std::string& name, const Simulator& sim) {
+  AtomicFile file(dir / name);
+  write_snapshot_obj(file.get(), sim.snapshot());
+  file.commit();
+}
+
+// The frame loop: stats rows as frames finish, a frame OBJ every `every` frames; stops at an
+// instability or an interrupt after the frame in progress.
+Outcome simulate(Simulator& sim, const RunOptions& o, double size, AtomicFile* stats) {
+  Progress progress(o.frames, !o.quiet);
+  Outcome r;
+  for (int frame = 1; frame <= o.frames; ++frame) {
+    const FrameStats s = run_frame(sim, o.params, frame);
+    r.frames_done = frame;
+    r.splits += s.splits;
+    r.restores += s.restores;
+    r.total_ms += s.step_ms;
+    if (stats) {
+      std::fprintf(stats->get(), "%s\n", stats_row(s).c_str());
+      stats->flush();
+    }
+    if (r.why = instability(s.totals, size); !r.why.empty()) {
+      r.code = kUnstable;
+      return r;
+    }
+    if (o.every > 0 && frame % o.every == 0 && stats) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05d.obj", frame);
+      write_frame(o.out, name, sim);
+    }
+    if (const int signal = interrupt_signal()) {
+      r.code = 128 + signal;
+      return r;
+    }
+    progress.update(frame, r.total_ms / frame);
+  }
+  return r;
+}
+
+void report(const Outcome& r, const RunOptions& o, const Simulator& sim) {
+  if (r.code > 128) {
+    std::fprintf(stderr, "crumple: interrupted by %s after frame %d of %d%s\n",
+                 r.code == 128 + SIGINT ? "SIGINT" : "SIGTERM", r.frames_done, o.frames,
+                 o.out.empty() ? "" : "; stats.csv and final.obj hold the frames done");
+  } else if (r.code == kOk && !o.quiet) {
+    const Totals t = sim.totals();
+    std::printf("crumple: %d frames, %s backend: %d vertices, %d triangles, %ld splits, %ld restores, %.3f ms/frame\n",
+                o.frames, sim.name(), t.vertices, t.triangles, r.splits, r.restores, r.total_ms / o.frames);
+  }
+}
+
+int run_checked(const RunOptions& o) {
+  // Everything is checked before anything is written.
+  if (std::string m = check_options(o); !m.empty()) return fail(kBadInput, m);
+  const std::size_t grid_vertices = o.mesh.empty() ? std::size_t(o.grid) * std::size_t(o.grid) : 0;
+  if (std::string m = check_memory(o, grid_vertices); !m.empty()) return fail(kBadInput, m);  // before allocating it
   InputMesh mesh;
   try {
     mesh = o.mesh.empty() ? make_grid(o.grid, !o.fixed_diagonals) : load_obj(o.mesh);
   } catch (const InputError& e) {
     return fail(kBadInput, e.what());
   }
+  if (std::string m = check_memory(o, mesh.positions.size()); !m.empty()) return fail(kBadInput, m);
+  if (o.params.max_vertices > 0 && std::size_t(o.params.max_vertices) < mesh.positions.size()) {
+    return fail(kBadInput, "--max-vertices " + std::to_string(o.params.max_vertices) + " is below the mesh's " +
+                               std::to_string(mesh.positions.size()) + " vertices");
+  }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
   std::unique_ptr<Simulator> sim;
   try {
     sim = make_simulator(o.backend, mesh, o.params, o.threads);
-  } catch (const std::exception& e) {
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {  // what a backend refuses
     return fail(kBadInput, e.what());
   }
   const double size = make_scene(mesh, o.params).size;
-
-  std::ofstream stats;
-  const fs::path dir(o.out), stats_tmp = dir / "stats.csv.partial";
   if (!o.out.empty()) {
-    std::error_code ec;
-    fs::create_directories(dir, ec);
-    if (ec) return fail(kBadInput, "cannot create --out folder " + o.out + ": " + ec.message());
-    stats.open(stats_tmp);
-    if (!stats) return fail(kBadInput, "cannot write " + stats_tmp.string());
-    stats << stats_header() << '\n';
+    if (std::string m = prepare_out(o.out, o.force); !m.empty()) return fail(kBadInput, m);
   }
 
-  Progress progress(o.frames, !o.quiet);
-  long splits = 0, restores = 0;
-  double total_ms = 0;
-  int code = kOk;
-  std::string why;
-  int frame = 1;
+  catch_interrupts();
+  Outcome r;
   try {
-    for (; frame <= o.frames; ++frame) {
-      const FrameStats s = run_frame(*sim, o.params, frame);
-      splits += s.splits;
-      restores += s.restores;
-      total_ms += s.step_ms;
-      if (stats.is_open()) stats << stats_row(s) << '\n';
-      if (why = instability(s.totals, size); !why.empty()) {
-        code = kUnstable;
-        break;
-      }
-      if (o.every > 0 && frame % o.every == 0 && !o.out.empty()) {
-        char name[32];
-        std::snprintf(name, sizeof name, "frame_%05d.obj", frame);
-        write_snapshot_obj((dir / name).string(), sim->snapshot());
-      }
-      progress.update(frame, total_ms / frame);
+    std::optional<AtomicFile> stats;
+    if (!o.out.empty()) {
+      stats.emplace(fs::path(o.out) / "stats.csv");
+      std::fprintf(stats->get(), "%s\n", stats_header());
     }
-    if (stats.is_open()) {
-      stats.close();
-      fs::rename(stats_tmp, dir / "stats.csv");
-    }
-    if (code == kOk && !o.out.empty()) write_snapshot_obj((dir / "final.obj").string(), sim->snapshot());
-  } catch (const std::exception& e) {
+    r = simulate(*sim, o, size, stats ? &*stats : nullptr);
+    if (stats) stats->commit();
+    if (r.code != kUnstable && !o.out.empty()) write_frame(o.out, "final.obj", *sim);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {  // a write failed
     return fail(kBadInput, e.what());
   }
-  if (code == kUnstable)
-    return fail(kUnstable, "simulation became unstable at frame " + std::to_string(frame) + ": " + why);
-
-  if (!o.quiet) {
-    const Totals t = sim->totals();
-    std::printf("crumple: %d frames, %s backend: %d vertices, %d triangles, %ld splits, %ld restores, %.3f ms/frame\n",
-                o.frames, sim->name(), t.vertices, t.triangles, splits, restores, total_ms / o.frames);
+  if (r.code == kUnstable) {
+    return fail(kUnstable, "simulation became unstable at frame " + std::to_string(r.frames_done) + ": " + r.why);
   }
-  return kOk;
+  report(r, o, *sim);
+  return r.code;
+}
+
+}  // namespace
+
+int fail(int code, const std::string& message) {
+  std::string line;
+  for (unsigned char c : message) {
+    if (c >= 0x20 && c != 0x7f) {
+      line += static_cast<char>(c);
+    } else {
+      char hex[5];
+      std::snprintf(hex, sizeof hex, "\\x%02x", c);
+      line += hex;
+    }
+  }
+  std::fprintf(stderr, "crumple: error: %s\n", line.c_str());
+  return code;
+}
+
+int run(const RunOptions& o) {
+  try {
+    return run_checked(o);
+  } catch (const std::bad_alloc&) {
+    return fail(kBadInput, "out of memory: the run needs more memory than this process may take");
+  }
 }
 
 }  // namespace crumple::app

@@ -16,13 +16,18 @@ struct RunOptions {
   std::string backend = "reference";
   int threads = 1;                ///< worker threads for parallel backends
   std::string out;                ///< output folder (empty: none)
+  bool force = false;             ///< --out may be a non-empty folder: replace crumple's files in it
   int every = 0;                  ///< also write every K-th frame as an OBJ (0: never)
   bool quiet = false;             ///< no progress bar, no summary
   Params params;
 };
 
-/// Exit codes of the command.
+/// Exit codes of the command; an interrupted run exits 128 + the signal (130 SIGINT, 143 SIGTERM).
 enum Exit { kOk = 0, kBadInput = 2, kUnstable = 3 };
+
+/// Prints `message` as one line "crumple: error: ..." on stderr (control bytes escaped as \xNN,
+/// so that a file's bytes cannot drive the terminal) and returns `code`.
+int fail(int code, const std::string& message);
 
 /// Runs the simulation; prints errors as one `crumple: error:` line. Returns the exit code.
 int run(const RunOptions& options);

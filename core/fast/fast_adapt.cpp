@@ -89,6 +89,10 @@ void FastSimulator::adapt_decide() {
 StepEvents FastSimulator::adapt_apply() {
   ++pass_;
   collect_events();
+  if (params_.max_vertices > 0) {  // as the reference: the budget's first candidates in event order
+    std::vector<int>& splits = scratch_.splits;
+    splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - topo_.live_vertices())));
+  }
   scratch_.changed.clear();
   StepEvents ev;
   ev.splits = apply_splits();

@@ -20,6 +20,11 @@ struct MeshLabels {
 /// repeating a vertex or with area below 1e-12 * (bounding-box diagonal)^2.
 void check_triangles(const InputMesh& mesh, const MeshLabels& labels);
 
+/// Every coordinate within +-kMaxCoordinate, every edge at least kMinEdgeLength long and at
+/// least kMinEdgeRelative times the largest coordinate magnitude.
+/// Expects check_triangles to have passed.
+void check_float_range(const InputMesh& mesh, const MeshLabels& labels);
+
 /// Flips triangles so that each edge-connected component is consistently oriented, keeping the
 /// orientation of the component's lowest-numbered triangle (breadth-first over shared edges).
 /// Throws for an edge in more than two triangles, or if a component is non-orientable.

@@ -11,6 +11,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include <sstream>
 #include <string_view>
 
+#include <sys/stat.h>
 #include <tiny_obj_loader.h>
 
 #include "mesh/mesh_checks.h"
@@ -28,11 +30,17 @@ namespace {
 
 using Vec3 = std::array<double, 3>;
 
-// Where each element of the file is.
+// Where each element of the file is, and the coordinates as read here (tinyobjloader's own
+// reading is not used for them: it reads "+-1" or "1e99999" as 0).
 struct ObjLayout {
+  std::vector<Vec3> vertex_position;  // coordinates of each 'v' element, in file order
   std::vector<int> vertex_line;    // line of each 'v' element, in file order
   std::vector<int> face_line;      // line of each 'f' element, in file order
   std::vector<int> vertices_before;  // number of 'v' elements above each face (relative indices)
+  // What tinyobjloader gets: the 'v', 'vt', 'vn' and 'f' lines, every other line blank (line
+  // numbers kept). Its readers of other elements convert unchecked numbers to int ('vw' joint
+  // ids: undefined behaviour, found by fuzzing) or size vectors from them ('t' tags).
+  std::string geometry;
 };
 
 // One face as tinyobjloader resolved it.
@@ -45,13 +53,24 @@ struct Face {
   throw InputError(path + ":" + std::to_string(line) + ": " + what);
 }
 
+// Refuses anything but a regular file (a FIFO would block, a device never ends) and files
+// larger than kMaxObjBytes, then reads it whole.
 std::string read_text(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": cannot read: is a directory");
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(info.st_mode)) throw InputError(path + ": cannot read: is a directory");
+  if (!S_ISREG(info.st_mode)) throw InputError(path + ": cannot read: not a regular file");
+  if (static_cast<std::uint64_t>(info.st_size) > kMaxObjBytes) {
+    throw InputError(path + ": file has " + std::to_string(info.st_size) + " bytes, more than the " +
+                     std::to_string(kMaxObjBytes >> 20) + " MiB an OBJ may have");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
-  std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  std::string text(static_cast<std::size_t>(info.st_size) + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
   if (in.bad()) throw InputError(path + ": cannot read: " + std::strerror(errno));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > static_cast<std::size_t>(info.st_size)) throw InputError(path + ": cannot read: the file grew while read");
   return text;
 }
 
@@ -68,27 +87,57 @@ std::vector<std::string_view> tokens(std::string_view s) {
   }
 }
 
-// Checks the coordinates of the vertex on `line` (the text after "v").
-void check_coordinates(std::string_view rest, const std::string& path, int line, int vertex) {
+// One coordinate: a decimal number with an optional sign, nothing else ("+-1", "1.5x" and
+// "0x10" are not numbers). Overflow is reported, underflow reads as 0 or a subnormal.
+double parse_coordinate(std::string_view word, const std::string& path, int line, const std::string& name) {
+  std::string quoted(1, '\'');  // built this way: "'" + std::string(word) trips -Wrestrict (g++ 12)
+  (quoted += word) += '\'';
+  std::string_view digits = word;
+  if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
+  const bool number = ec == std::errc() || ec == std::errc::result_out_of_range;
+  if (!number || end != digits.data() + digits.size()) {
+    fail_at(path, line, name + " coordinate " + quoted + " is not a number");
+  }
+  if (ec == std::errc::result_out_of_range) value = std::strtod(std::string(digits).c_str(), nullptr);
+  if (!std::isfinite(value)) fail_at(path, line, name + " coordinate " + quoted + " is not finite");
+  return value;
+}
+
+// The coordinates of the vertex on `line` (the text after "v").
+Vec3 read_coordinates(std::string_view rest, const std::string& path, int line, int vertex) {
   const auto words = tokens(rest);
   const std::string name = "vertex " + std::to_string(vertex);
   if (words.size() < 3) {
     fail_at(path, line, name + " has " + std::to_string(words.size()) + " coordinates, needs 3");
   }
-  for (int d = 0; d < 3; ++d) {
-    std::string_view word = words[d];
-    if (word.size() > 1 && word[0] == '+') word.remove_prefix(1);  // from_chars rejects '+'
-    double value = 0.0;
-    const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
-    std::string quoted(1, '\'');
-    (quoted += words[d]) += '\'';
-    // Out of range is still a number: overflow is caught after loading (it becomes infinite),
-    // underflow is harmless.
-    const bool number = ec == std::errc() || ec == std::errc::result_out_of_range;
-    if (!number || end != word.data() + word.size()) {
-      fail_at(path, line, name + " coordinate " + quoted + " is not a number");
+  Vec3 p{};
+  for (int d = 0; d < 3; ++d) p[d] = parse_coordinate(words[d], path, line, name);
+  return p;
+}
+
+// True if s is a non-zero integer that fits an int, written as digits with an optional '-'
+// (tinyobjloader reads indices with atoi: "3abc", "3.9" and 4294967299 would all read as 3).
+bool is_index(std::string_view s) {
+  int value = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+  return !s.empty() && ec == std::errc() && end == s.data() + s.size() && value != 0;
+}
+
+// Checks one corner of a face: "v", "v/vt", "v//vn" or "v/vt/vn", each index an is_index.
+void check_corner(std::string_view corner, const std::string& path, int line) {
+  std::size_t part = 0;
+  for (std::size_t start = 0;; ++part) {
+    const std::size_t slash = std::min(corner.find('/', start), corner.size());
+    const std::string_view index = corner.substr(start, slash - start);
+    const bool optional = part == 1 && slash < corner.size();  // the vt of "v//vn"
+    if (part > 2 || (!is_index(index) && !(optional && index.empty()))) {
+      fail_at(path, line, "face corner '" + std::string(corner) +
+                              "' is not a vertex index (a non-zero integer, optionally /vt/vn)");
     }
-    if (!std::isfinite(value)) fail_at(path, line, name + " coordinate " + quoted + " is not finite");
+    if (slash == corner.size()) return;
+    start = slash + 1;
   }
 }
 
@@ -105,18 +154,26 @@ ObjLayout scan_layout(const std::string& text, const std::string& path) {
     s = s.substr(0, s.find('\0'));  // tinyobjloader reads a line as a C string
     const std::size_t first = std::min(s.find_first_not_of(" \t"), s.size());
     s.remove_prefix(first);
-    if (s.size() < 2 || (s[1] != ' ' && s[1] != '\t')) continue;
+    const bool element = s.size() >= 2 && (s[1] == ' ' || s[1] == '\t');
+    const bool texture_or_normal =
+        s.size() >= 3 && s[0] == 'v' && (s[1] == 't' || s[1] == 'n') && (s[2] == ' ' || s[2] == '\t');
+    if ((element && (s[0] == 'v' || s[0] == 'f')) || texture_or_normal) layout.geometry += s;
+    layout.geometry += '\n';
+    if (!element) continue;
     if (s[0] == 'v') {
       layout.vertex_line.push_back(line);
-      check_coordinates(s.substr(2), path, line, static_cast<int>(layout.vertex_line.size()));
+      layout.vertex_position.push_back(
+          read_coordinates(s.substr(2), path, line, static_cast<int>(layout.vertex_line.size())));
     } else if (s[0] == 'f') {
-      const std::size_t corners = tokens(s.substr(2)).size();
+      const auto words = tokens(s.substr(2));
+      const std::size_t corners = words.size();
       if (corners < 3) {
         fail_at(path, line, "face has " + std::to_string(corners) + " vertices, needs at least 3");
       }
       if (corners > 255) {  // tinyobjloader stores face sizes in an unsigned char
         fail_at(path, line, "face has " + std::to_string(corners) + " vertices, at most 255 are supported");
       }
+      for (std::string_view corner : words) check_corner(corner, path, line);
       layout.face_line.push_back(line);
       layout.vertices_before.push_back(static_cast<int>(layout.vertex_line.size()));
     }
@@ -260,17 +317,13 @@ bool split_polygon(const std::vector<int>& c, const std::vector<Vec3>& pos,
   return false;
 }
 
-}  // namespace
-
-InputMesh load_obj(const std::string& path) {
-  const std::string text = read_text(path);
-  const ObjLayout layout = scan_layout(text, path);
-
+// The faces as tinyobjloader reads them, matched to the file's lines.
+std::vector<Face> read_faces(const ObjLayout& layout, const std::string& path) {
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;
   std::string warn, err;
-  std::istringstream stream(text);
+  std::istringstream stream(layout.geometry);
   // No material reader (materials are not needed), no triangulation, no default colors.
   if (!tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &stream, nullptr, false, false)) {
     fail_tinyobj(path, err);
@@ -279,18 +332,22 @@ InputMesh load_obj(const std::string& path) {
   if (static_cast<std::size_t>(vertex_count) != layout.vertex_line.size()) {
     throw InputError(path + ": cannot match tinyobjloader's vertices to the file's 'v' lines");
   }
-  std::vector<Vec3> positions(vertex_count);
-  for (int k = 0; k < vertex_count; ++k) {
-    for (int d = 0; d < 3; ++d) positions[k][d] = attrib.vertices[3 * k + d];
-    if (!std::isfinite(positions[k][0]) || !std::isfinite(positions[k][1]) ||
-        !std::isfinite(positions[k][2])) {
-      fail_at(path, layout.vertex_line[k],
-              "vertex " + std::to_string(k + 1) + " has a coordinate too large for float");
-    }
-  }
-  const std::vector<Face> faces = collect_faces(shapes, layout, vertex_count, path);
+  std::vector<Face> faces = collect_faces(shapes, layout, vertex_count, path);
   check_warnings(path, warn);
   if (faces.empty()) throw InputError(path + ": no triangles: the file has no faces ('f' lines)");
+  return faces;
+}
+
+}  // namespace
+
+InputMesh load_obj(const std::string& path) { return parse_obj(read_text(path), path); }
+
+InputMesh parse_obj(std::string text, const std::string& path) {
+  // A UTF-8 byte-order mark is not part of the first line (tinyobjloader would skip that line).
+  if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text = text.substr(3);
+  const ObjLayout layout = scan_layout(text, path);
+  const std::vector<Face> faces = read_faces(layout, path);
+  const std::vector<Vec3>& positions = layout.vertex_position;
 
   // Triangles (original vertex indices) and the line each came from.
   std::vector<std::array<int, 3>> triangles;
@@ -323,6 +380,7 @@ InputMesh load_obj(const std::string& path) {
   }
 
   mesh_detail::check_triangles(mesh, labels);
+  mesh_detail::check_float_range(mesh, labels);
   mesh_detail::orient_consistently(mesh, labels);
   mesh_detail::check_manifold(mesh, labels);
   return mesh;

@@ -188,6 +188,37 @@ void check_triangles(const InputMesh& mesh, const MeshLabels& labels) {
   }
 }
 
+void check_float_range(const InputMesh& mesh, const MeshLabels& labels) {
+  double largest = 0.0;
+  int at = 0;
+  for (std::size_t k = 0; k < mesh.positions.size(); ++k) {
+    for (double c : mesh.positions[k]) {
+      if (std::abs(c) > largest) largest = std::abs(c), at = static_cast<int>(k);
+    }
+  }
+  std::ostringstream msg;
+  msg.precision(3);
+  if (largest > kMaxCoordinate) {
+    msg << labels.where << ": vertex " << vertex_name(labels, at) << " has a coordinate of magnitude "
+        << largest << ", beyond " << kMaxCoordinate << ": too large to simulate in float";
+    fail(msg.str());
+  }
+  const double shortest_allowed = std::max(kMinEdgeLength, kMinEdgeRelative * largest);
+  for (const auto& tri : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const auto& a = mesh.positions[tri[k]];
+      const auto& b = mesh.positions[tri[(k + 1) % 3]];
+      const double length = std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+      if (length >= shortest_allowed) continue;
+      msg << labels.where << ": " << edge_name(labels, tri[k], tri[(k + 1) % 3]) << " has length "
+          << length << ", below max(" << kMinEdgeLength << ", " << kMinEdgeRelative
+          << " x the largest coordinate magnitude " << largest
+          << "): float cannot resolve it (scale the mesh or move it to the origin)";
+      fail(msg.str());
+    }
+  }
+}
+
 void orient_consistently(InputMesh& mesh, const MeshLabels& labels) {
   const std::vector<EdgeUse> uses = sorted_edge_uses(mesh);
   check_edge_use_counts(uses, labels);
@@ -283,6 +314,7 @@ void check_manifold(const InputMesh& mesh, const MeshLabels& labels) {
 void validate_mesh(const InputMesh& mesh, const std::string& where) {
   const mesh_detail::MeshLabels labels{where, {}, {}};
   mesh_detail::check_triangles(mesh, labels);
+  mesh_detail::check_float_range(mesh, labels);
   mesh_detail::check_manifold(mesh, labels);
 }
 

@@ -32,6 +32,7 @@ std::string Params::validate() const {
       {"phi", phi, 0.0, 1.0},
       {"psi", psi, 0.0, 1.0},                {"epsilon", epsilon, 0.0, 1.0},
       {"varphi", varphi, 1.0, 100.0},        {"floor", floor, 0.0, 1.0},
+      {"max-vertices", double(max_vertices), 0, 2e9},
   };
   for (const Range& r : ranges) {
     std::string m = check(r.name, r.value, r.lo, r.hi);

@@ -62,6 +62,8 @@ struct Params {
                                 ///< initial mean edge length never break
   RestoreForm restore = RestoreForm::Exact;
   std::uint64_t seed = 1;       ///< seed of the counter-based random stream
+  int max_vertices = 0;         ///< vertex budget: a step's splits, in event order, stop where
+                                ///< they would take the live vertices past it (0: unlimited)
 
   /// Time step h.
   double h() const { return frame_dt / substeps; }

@@ -269,6 +269,9 @@ StepEvents ReferenceSimulator::adapt() {
       if ((1.0 - n_rl) / 2.0 >= params_.epsilon) restores.push_back(e);  // [Eq 10]
     }
   }
+  if (params_.max_vertices > 0) {  // a split adds one vertex: the budget's first candidates only
+    splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - mesh_.live_vertices())));
+  }
   auto touched = [&](int t) {
     return t >= 0 && t < int(tri_stamp_.size()) && tri_stamp_[t] == pass_;
   };

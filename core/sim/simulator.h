@@ -16,6 +16,7 @@
 #pragma once
 
 #include <array>
+#include <cstdio>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -78,7 +79,8 @@ struct Snapshot {
 
 /// Writes the live vertices (renumbered densely) and triangles of a snapshot as an OBJ, with
 /// every auxiliary spring (a crease held by a broken edge) as an `l a b` line.
-void write_snapshot_obj(const std::string& path, const Snapshot& s);
+/// Write errors are left in std::ferror(file) for the caller, who checks it before closing.
+void write_snapshot_obj(std::FILE* file, const Snapshot& s);
 
 /// What a renderer reads, packed by Simulator::render in the layout a GPU takes.
 struct RenderBuffers {

@@ -1,64 +1,15 @@
 // The `crumple` command as a user meets it: outputs, exit codes, one-line errors, no half-written
 // output folder.
-#include <gtest/gtest.h>
+#include <sys/stat.h>
 
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <string>
-#include <sys/wait.h>
-#include <unistd.h>
+#include <initializer_list>
+#include <utility>
 
-namespace fs = std::filesystem;
+#include "cli_support.h"
 
 namespace {
 
-struct Result {
-  int code = -1;       ///< exit status
-  std::string err;     ///< stderr
-  std::string out;     ///< stdout
-};
-
-Result crumple(const std::string& args) {
-  static int calls = 0;  // ctest runs these tests in parallel processes: unique files each
-  const fs::path dir = fs::temp_directory_path() /
-                       ("crumple_cli_io_" + std::to_string(::getpid()) + "_" + std::to_string(++calls));
-  fs::create_directories(dir);
-  const std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
-  const std::string cmd = std::string(CRUMPLE_EXE) + " " + args + " >" + out + " 2>" + err + " </dev/null";
-  const int status = std::system(cmd.c_str());
-  Result r;
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err), o(out);
-  std::stringstream se, so;
-  se << e.rdbuf();
-  so << o.rdbuf();
-  r.err = se.str();
-  r.out = so.str();
-  fs::remove_all(dir);
-  return r;
-}
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("crumple_cli_" + name);
-  fs::remove_all(d);
-  return d;
-}
-
-fs::path write_file(const std::string& name, const std::string& text) {
-  const fs::path p = fs::temp_directory_path() / name;
-  std::ofstream(p) << text;
-  return p;
-}
-
-// An error is exactly one line on stderr that begins "crumple: error:" and names `what`.
-void expect_error(const Result& r, int code, const std::string& what) {
-  EXPECT_EQ(r.code, code) << r.err;
-  EXPECT_EQ(r.err.rfind("crumple: error:", 0), 0u) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  EXPECT_NE(r.err.find(what), std::string::npos) << r.err;
-}
+using namespace cli_test;
 
 TEST(Cli, RunWritesStatsAndFinalObj) {
   const fs::path d = fresh_dir("ok");
@@ -84,16 +35,21 @@ TEST(Cli, VersionIsTheProjectVersion) {
   EXPECT_EQ(r.out, std::string("crumple ") + CRUMPLE_EXPECTED_VERSION + "\n");
 }
 
+// Each command line exits 2 with one error line naming what it pairs with.
+void expect_rejected(std::initializer_list<std::pair<const char*, const char*>> cases) {
+  for (const auto& [args, what] : cases) expect_error(crumple(args), 2, what);
+}
+
 TEST(Cli, BadArgumentsExitTwoWithOneLine) {
-  expect_error(crumple("run --grid 1"), 2, "--grid");
-  expect_error(crumple("run --phi 1.5"), 2, "--phi");
-  expect_error(crumple("run --kappa nan"), 2, "--kappa");
-  expect_error(crumple("run --integrator magic"), 2, "--integrator");
-  expect_error(crumple("run --frames 0"), 2, "--frames");
-  expect_error(crumple("run --varphi 0.5"), 2, "--varphi");
-  expect_error(crumple("run --no-such-option"), 2, "no-such-option");
-  expect_error(crumple("run --grid 8 --mesh x.obj"), 2, "excludes");
-  expect_error(crumple("run --backend nope"), 2, "--backend");
+  expect_rejected({{"run --grid 1", "--grid"},
+                   {"run --phi 1.5", "--phi"},
+                   {"run --kappa nan", "--kappa"},
+                   {"run --integrator magic", "--integrator"},
+                   {"run --frames 0", "--frames"},
+                   {"run --varphi 0.5", "--varphi"},
+                   {"run --no-such-option", "no-such-option"},
+                   {"run --grid 8 --mesh x.obj", "excludes"},
+                   {"run --backend nope", "--backend"}});
 }
 
 TEST(Cli, BadFilesExitTwoAndWriteNothing) {
@@ -117,6 +73,92 @@ TEST(Cli, UnstableRunExitsThreeNamingTheFrame) {
   const Result r = crumple("run --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200 --out " + d.string());
   expect_error(r, 3, "unstable at frame");
   EXPECT_FALSE(fs::exists(d / "final.obj"));
+}
+
+// Catches: CLI11 converting '' to 0 / "not given" (before: --kappa '' ran with kappa 0, --mesh ''
+// the default grid) and strtoull wrapping seeds (-1 and 2^64 both became 2^64-1).
+TEST(Cli, EmptyValuesAndOutOfRangeSeedsAreRejected) {
+  expect_rejected({{"run --mesh ''", "--mesh"},
+                   {"run --kappa ''", "--kappa"},
+                   {"run --out ''", "--out"},
+                   {"run --seed -1", "--seed"},
+                   {"run --seed 18446744073709551616", "--seed"},
+                   {"run --seed 1x", "--seed"}});
+  EXPECT_EQ(crumple("run --grid 4 --frames 1 --quiet --seed 18446744073709551615").code, 0);
+}
+
+// Catches: no estimate (before: --grid 8192 was accepted and died of std::bad_alloc, exit 134)
+// and a bad_alloc that escapes as an abort or prints only "std::bad_alloc".
+TEST(Cli, MemoryIsEstimatedAndExhaustionIsOneLine) {
+  const Result huge = crumple("run --grid 8192");
+  expect_error(huge, 2, "GB of memory");
+  if (CRUMPLE_SANITIZED) GTEST_SKIP() << "sanitizers reserve more address space than ulimit -v allows";
+  expect_error(crumple("run --grid 700 --frames 1", "ulimit -v 400000;"), 2, "GB of memory");
+  // A 250 MB file cannot even be read under a 200 MB address-space limit: bad_alloc in load_obj.
+  const fs::path big = write_file("crumple_cli_big.obj", "");
+  fs::resize_file(big, 250u << 20);
+  expect_error(crumple("run --mesh " + big.string(), "ulimit -v 200000;"), 2, "out of memory");
+  fs::remove(big);
+}
+
+// Catches: reading any path (before: /dev/zero was read without end and a FIFO with no writer
+// blocked forever; `timeout` turns that into a failure here).
+TEST(Cli, OnlyRegularMeshFilesAreRead) {
+  expect_error(crumple("run --mesh /dev/zero", "timeout 20"), 2, "not a regular file");
+  const fs::path fifo = fresh_dir("fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  expect_error(crumple("run --mesh " + fifo.string(), "timeout 20"), 2, "not a regular file");
+  fs::remove(fifo);
+}
+
+// Catches: meshes float cannot simulate passing validation (before: exit 3 at frame 1).
+TEST(Cli, MeshesBeyondFloatExitTwo) {
+  const fs::path far = write_file("crumple_far.obj", "v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n");
+  expect_error(crumple("run --backend fast --mesh " + far.string()), 2, "too large to simulate in float");
+}
+
+// Catches: raw bytes of a file name or OBJ line reaching the terminal (ESC [ 3 1 m turned it red).
+TEST(Cli, ControlBytesInMessagesAreEscaped) {
+  const Result r = crumple("run --mesh \"$(printf '\\033[31mred\\a.obj')\"");
+  expect_error(r, 2, "\\x1b[31mred\\x07.obj");
+  EXPECT_EQ(r.err.find('\x1b'), std::string::npos);
+  const fs::path obj = write_file("crumple_esc.obj", "v 0 0 0\nv 1 \x1b]0;pwned\x07 0\nv 0 1 0\nf 1 2 3\n");
+  const Result bad = crumple("run --mesh " + obj.string());
+  expect_error(bad, 2, "\\x1b]0;pwned\\x07");
+}
+
+// Catches: a README example that does not run (before: the free-scene example exited 3 at frame
+// 65). Every `build/app/crumple ...` line of README.md runs from the source folder, --out in a
+// fresh temporary folder.
+TEST(Cli, EveryReadmeCommandLineExitsZero) {
+  std::istringstream readme(read_all(fs::path(CRUMPLE_SOURCE_DIR) / "README.md"));
+  int lines = 0;
+  for (std::string line; std::getline(readme, line);) {
+    if (line.rfind("build/app/crumple ", 0) != 0) continue;
+    std::string args = line.substr(line.find(' ') + 1);
+    args = args.substr(0, args.find('#'));
+    if (const std::size_t out = args.find("--out "); out != std::string::npos) {
+      const std::size_t end = args.find(' ', out + 6);
+      args.replace(out, end == std::string::npos ? std::string::npos : end - out,
+                   "--out " + fresh_dir("readme" + std::to_string(lines)).string());
+    }
+    ++lines;
+    const Result r = crumple(args + " --quiet", std::string("cd ") + CRUMPLE_SOURCE_DIR + " &&");
+    EXPECT_EQ(r.code, 0) << line << "\n" << r.err;
+  }
+  EXPECT_GE(lines, 4);
+}
+
+// Catches: a shared mesh that loads but cannot be simulated by a backend (README: woody,
+// alligator, spot and stanford-bunny run; beetle and suzanne are rejected, test_mesh names why).
+TEST(Cli, SharedMeshesRunOnBothBackends) {
+  for (const char* name : {"woody", "alligator", "spot", "stanford-bunny"}) {
+    for (const char* backend : {"reference", "fast"}) {
+      const Result r = crumple(std::string("run --frames 5 --quiet --backend ") + backend + " --mesh " +
+                               CRUMPLE_TEST_DATA + "/" + name + ".obj");
+      EXPECT_EQ(r.code, 0) << name << " " << backend << "\n" << r.err;
+    }
+  }
 }
 
 }  // namespace

@@ -177,35 +177,54 @@ TEST_P(Equations, SplitOffsetFollowsCurvature) {
   EXPECT_NEAR(off.norm(), 0.5 * std::sqrt(l0 * l0 - lt * lt), tol());
 }
 
+// Frequency of a diagonal break within one frame of `substeps` steps over `trials` seeds.
+int count_breaks(const std::string& backend, Params p, double alpha, double scale, int substeps, int trials) {
+  p.floor = 1.0;  // floor length = mean edge (2 + sqrt 2)/3 > 1: sides never break
+  p.substeps = substeps;
+  p.restoration = false;
+  int breaks = 0;
+  for (int seed = 1; seed <= trials; ++seed) {
+    p.seed = std::uint64_t(seed);
+    auto sim = make_simulator(backend, unit_square(), p, 1);
+    sim->set_state(folded_square(alpha, scale), std::vector<Vec3d>(4, Vec3d{}));
+    int splits = 0;
+    for (int k = 0; k < substeps; ++k) splits += sim->step().splits;
+    EXPECT_LE(splits, 1);
+    if (splits) { EXPECT_TRUE(sim->snapshot().edges[kDiagonal].auxiliary); }
+    breaks += splits;
+  }
+  return breaks;
+}
+
 // [Eq 6] by counting: fold the square by alpha, compress it by `scale`; with the floor above
 // the side length only the diagonal can break, with P = 1/4 c (1 - phi n_ij)(1 + phi n_rl),
 // c = 1 - scale, n_ij = 1 (both hinge normals bisect), n_rl = cos alpha. Over many seeds the
-// frequency of a break in the first frame must match P within 4.5 standard deviations - with
-// one step per frame and with four (P_step = 1 - (1 - P)^(h/h_ref) keeps the per-frame rate).
+// frequency of a break in the first frame must match P within 4.5 standard deviations.
 TEST_P(Equations, FractureProbabilityByCounting) {
   const double alpha = M_PI / 3, scale = 0.6, phi = 0.5;
   const double P = 0.25 * (1 - scale) * (1 - phi) * (1 + phi * std::cos(alpha));
-  for (int substeps : {1, 4}) {
-    Params p = still_params();
-    p.phi = phi;
-    p.floor = 1.0;  // floor length = mean edge (2 + sqrt 2)/3 > 1: sides never break
-    p.substeps = substeps;
-    p.restoration = false;
-    const int trials = 4000;
-    int breaks = 0;
-    for (int seed = 1; seed <= trials; ++seed) {
-      p.seed = std::uint64_t(seed);
-      auto sim = make(unit_square(), p);
-      sim->set_state(folded_square(alpha, scale), std::vector<Vec3d>(4, Vec3d{}));
-      int splits = 0;
-      for (int k = 0; k < substeps; ++k) splits += sim->step().splits;
-      ASSERT_LE(splits, 1);
-      if (splits) { EXPECT_TRUE(sim->snapshot().edges[kDiagonal].auxiliary); }
-      breaks += splits;
-    }
-    const double sigma = std::sqrt(trials * P * (1 - P));
-    EXPECT_NEAR(breaks, trials * P, 4.5 * sigma) << "substeps " << substeps << " P " << P;
-  }
+  Params p = still_params();
+  p.phi = phi;
+  const int trials = 4000, breaks = count_breaks(GetParam(), p, alpha, scale, 1, trials);
+  EXPECT_NEAR(breaks, trials * P, 4.5 * std::sqrt(trials * P * (1 - P))) << "P " << P;
+}
+
+// With S steps a frame, P_step = 1 - (1 - P)^(h/h_ref) keeps the per-frame break rate at P.
+// P = 0.2375 (phi = 0, c = 0.95) and S = 8 set it apart from the two wrong rates: P h/h_ref per
+// step gives 1 - (1 - P/8)^8 = 0.2140 a frame (7.8 standard deviations off over 20,000 seeds), P
+// per step 1 - (1 - P)^8 = 0.886. Catches either mutation of break_probability.
+TEST_P(Equations, FractureProbabilityPerStepKeepsTheFrameRate) {
+  const double scale = 0.05, P = 0.25 * (1 - scale);
+  const int substeps = 8, trials = 20000;
+  const double sigma = std::sqrt(trials * P * (1 - P));
+  const double linear = 1 - std::pow(1 - P / substeps, substeps), per_step = 1 - std::pow(1 - P, substeps);
+  ASSERT_GT(trials * (P - linear), 7 * sigma);  // the design separates the rates
+  ASSERT_GT(trials * (per_step - P), 7 * sigma);
+  Params p = still_params();
+  p.phi = 0;
+  const int breaks = count_breaks(GetParam(), p, 0.0, scale, substeps, trials);
+  EXPECT_NEAR(breaks, trials * P, 4.5 * sigma) << "P " << P << "; P h/h_ref would give about "
+                                               << trials * linear << ", P per step " << trials * per_step;
 }
 
 // No break when stretched, when phi = 1 on a flat sheet, or below the refinement floor.

@@ -12,17 +12,6 @@ namespace {
 
 class Runs : public EachBackend {};
 
-/// A free sheet, squeezed and easy to break and restore: splits and restores every step.
-Params churn_params() {
-  Params p;
-  p.scene = Scene::Free;
-  p.squeeze = 0.6;
-  p.phi = 0.2;
-  p.epsilon = 0.15;
-  p.floor = 0.05;
-  return p;
-}
-
 // Free relax (no external force), balanced bending, exact restore: total mass and linear
 // momentum stay what they were, to round-off, through over a thousand splits and restores,
 // and the mesh is valid after every step.

@@ -59,6 +59,17 @@ inline Params still_params() {
   return p;
 }
 
+/// A free sheet, squeezed and easy to break and restore: splits and restores every step.
+inline Params churn_params() {
+  Params p;
+  p.scene = Scene::Free;
+  p.squeeze = 0.6;
+  p.phi = 0.2;
+  p.epsilon = 0.15;
+  p.floor = 0.05;
+  return p;
+}
+
 /// Tolerance for comparisons of a backend with exact (hand-derived) values.
 inline double tolerance(const std::string& backend) { return backend == "reference" ? 1e-12 : 2e-5; }
 
