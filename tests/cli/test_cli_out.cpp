@@ -135,7 +135,11 @@ void interrupt_run(int signal, int expected_code, const std::string& name) {
   EXPECT_NE(message.find(signal == SIGINT ? "SIGINT" : "SIGTERM"), std::string::npos) << message;
   EXPECT_EQ(count_lines(d / "stats.csv"), frames + 1);
   std::ifstream stats(d / "stats.csv");
-  for (std::string row; std::getline(stats, row);) EXPECT_EQ(std::count(row.begin(), row.end(), ','), 13) << row;
+  std::string header;
+  std::getline(stats, header);  // its exact text is Cli's header test's business
+  const auto columns = std::count(header.begin(), header.end(), ',');
+  EXPECT_GE(columns, 13);
+  for (std::string row; std::getline(stats, row);) EXPECT_EQ(std::count(row.begin(), row.end(), ','), columns) << row;
   EXPECT_NE(read_all(d / "final.obj").find("\nf "), std::string::npos);
   EXPECT_FALSE(fs::exists(d / "stats.csv.partial"));
   fs::remove_all(d);
