@@ -36,6 +36,19 @@ class Integrators : public EachBackend {
            (p.integrator != Integrator::Implicit && p.integrator != Integrator::Xpbd &&
             !(p.integrator == Integrator::Approx && p.jacobian == Jacobian::Axial));
   }
+  /// One step from (x0, v0): the forces at the start, the state before and after.
+  struct OneStep {
+    std::vector<Vec3d> forces;
+    Snapshot before, after;
+  };
+  OneStep one_step(const Params& p) const {
+    auto sim = make(mesh, p);
+    sim->set_state(x0, v0);
+    OneStep r{sim->forces(), sim->snapshot(), {}};
+    sim->step();
+    r.after = sim->snapshot();
+    return r;
+  }
   std::vector<Vec3d> x0, v0;
   bool skip_implicit = false;  ///< Baraff-Witkin runs on the reference path only
 };
@@ -132,12 +145,7 @@ TEST_P(Integrators, OneSweepOfTheImplicitVelocityStep) {
     const std::string label = std::string(to_string(c.integrator)) + " " + to_string(c.jacobian) + " " +
                               to_string(c.predictor) + " c=" + std::to_string(c.viscosity);
     if (!supports(p)) continue;
-    auto sim = make(mesh, p);
-    sim->set_state(x0, v0);
-    const auto f = sim->forces();
-    const Snapshot s0 = sim->snapshot();
-    sim->step();
-    const Snapshot s = sim->snapshot();
+    const auto [f, s0, s] = one_step(p);
     const std::vector<V3> v = one_sweep(p, s0, f);
     for (size_t k = 0; k < x0.size(); ++k) {
       EXPECT_NEAR((v3(s.velocity[k]) - v[k]).norm(), 0, tol() * 100) << k << " " << label;
@@ -212,12 +220,7 @@ TEST_P(Integrators, ConvergedSweepsSolveTheImplicitVelocityStep) {
     p.viscosity = 5;
     p.sweeps = 400;
     if (!supports(p)) continue;
-    auto sim = make(mesh, p);
-    sim->set_state(x0, v0);
-    const auto f = sim->forces();
-    const Snapshot s0 = sim->snapshot();
-    sim->step();
-    const Snapshot s = sim->snapshot();
+    const auto [f, s0, s] = one_step(p);
     const double h = p.h();
     std::vector<V3> residual(x0.size());
     for (size_t k = 0; k < x0.size(); ++k)
