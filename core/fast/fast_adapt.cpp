@@ -426,8 +426,33 @@ std::vector<Decision> FastSimulator::decide() const {
   FastSimulator tmp(*this);
   tmp.adapt_decide();
   std::vector<Decision> out(tmp.decisions_.size());
-  for (size_t e = 0; e < out.size(); ++e) out[tmp.topo_.E.lid[e]].kind = tmp.decisions_[e];
+  for (size_t e = 0; e < out.size(); ++e) {
+    out[tmp.topo_.E.lid[e]].kind = tmp.decisions_[e];
+    out[tmp.topo_.E.lid[e]].margin = tmp.margin(int(e));
+  }
   return out;
+}
+
+// Decision::margin as the reference defines it, in double from this backend's float state (a
+// test hook: the kernel decides in float and keeps no margin). Mesh edges: P_step - u [Eq 6];
+// auxiliary edges with a split record: (1 - n_rl)/2 - epsilon [Eq 10].
+double FastSimulator::margin(int e) const {
+  const Vertices& V = topo_.V;
+  const Edges& E = topo_.E;
+  const std::uint8_t f = E.flags[e];
+  auto dot_n = [&](int a, int b) { return double(V.nx[a]) * V.nx[b] + double(V.ny[a]) * V.ny[b] + double(V.nz[a]) * V.nz[b]; };
+  if (!(f & kAlive)) return 0;  // a dead slot's indices may be stale
+  const int a = E.a[e], b = E.b[e], l = E.wl[e], r = E.wr[e];
+  const double n_rl = (l >= 0 && r >= 0) ? dot_n(r, l) : 1.0;
+  if (!(f & kMesh)) return (params_.restoration && E.record[e] >= 0) ? (1.0 - n_rl) / 2.0 - params_.epsilon : 0;
+  if (!params_.fracture) return 0;
+  const double u = uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::Fracture);
+  const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
+  const double lt = std::sqrt(dx * dx + dy * dy + dz * dz);
+  if (!(f & kBreakable) || E.l0[e] < scene_.floor_length || !(lt < E.l0[e])) return -u;
+  const double c = 1.0 - lt / E.l0[e];
+  const double P = std::clamp(0.25 * c * (1 - params_.phi * dot_n(a, b)) * (1 + params_.phi * n_rl), 0.0, 1.0);
+  return 1.0 - std::pow(1.0 - P, params_.h() / kReferenceStep) - u;
 }
 
 bool FastSimulator::split(int id) {

@@ -141,6 +141,7 @@ class FastSimulator final : public Simulator {
   int apply_restores(); ///< returns the restores applied
   void renew_normals();
   bool touched(int t) const;  ///< triangle t was changed by this pass
+  double margin(int e) const; ///< Decision::margin of slot e on the current normals (decide())
   void stamp(int t);          ///< marks triangle t changed by this pass
   // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;

@@ -46,6 +46,9 @@ struct Lockstep {
     EXPECT_EQ(a.size(), b.size());
     for (size_t e = 0; e < a.size() && e < b.size(); ++e) {
       ++compared;
+      // Decision::margin is filled by both backends (P_step - u or the restoration angle's
+      // distance from epsilon) and agrees to float round-off.
+      EXPECT_NEAR(a[e].margin, b[e].margin, 1e-4) << "edge " << e;
       if (a[e].kind == b[e].kind) continue;
       // Float round-off of P (relative ~1e-6) decides only when P_step is that close to u.
       EXPECT_LT(std::abs(a[e].margin), 1e-4) << "edge " << e << " ref " << int(a[e].kind) << " fast " << int(b[e].kind);
