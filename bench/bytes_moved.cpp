@@ -14,15 +14,16 @@ constexpr double kF4 = 16, kOut = 64;                // Float4 (g, area), EdgeOu
 static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut);
 constexpr double kLine = 64;
 
-double list_row(int stride) { return kI * stride; }  ///< one vertex's fixed-stride adjacency row
-double list_lines(int stride) { return std::ceil(list_row(stride) / kLine); }
+/// One vertex's list: its block start and its share of the pool.
+double list_row(double room) { return kI + kI * room; }
+double list_lines(double room) { return 1 + std::ceil(kI * room / kLine); }
 
 // triangle_areas: per triangle slot its corners v0..v2 and alive in, its area vector out; the
 // corners' positions x, y, z once per vertex.
 // vertex_normals: per vertex its triangle row and count, the normal n out; each area once.
 double normals(const LayoutSizes& s) {
   const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * 3 * kF;
-  const double sums = s.vertices * (list_row(s.stride_t) + kU16 + 3 * kF) + s.triangles * kF4;
+  const double sums = s.vertices * (list_row(s.room_t) + kU16 + 3 * kF) + s.triangles * kF4;
   return areas + sums;
 }
 
@@ -35,7 +36,7 @@ double edge_forces(const LayoutSizes& s) {
 // Per vertex its spring and wing rows and both counts, m, n, v in, f, ksum and g out; every
 // EdgeOut record once.
 double gather(const LayoutSizes& s) {
-  const double per_vertex = list_row(s.stride_e) + list_row(s.stride_t) + 2 * kU16 + (kF + 6 * kF) + 4 * kF + kF4;
+  const double per_vertex = list_row(s.room_e) + list_row(s.room_t) + 2 * kU16 + (kF + 6 * kF) + 4 * kF + kF4;
   return s.vertices * per_vertex + s.edges * kOut;
 }
 
@@ -43,7 +44,7 @@ double gather(const LayoutSizes& s) {
 // once (the vertex's own g among them), g_next out. Then momentum_drift (m, g, v, f in), the
 // total mass (m in) and advance (m, g, x, v in; x, v out).
 double integrate(const LayoutSizes& s, int sweeps) {
-  const double sweep = s.vertices * (list_row(s.stride_e) + kU16 + 2 * kF + 6 * kF + kF4 + kF4);
+  const double sweep = s.vertices * (list_row(s.room_e) + kU16 + 2 * kF + 6 * kF + kF4 + kF4);
   const double drift = s.vertices * (kF + kF4 + 6 * kF);
   const double mass = s.vertices * kF;
   const double advance = s.vertices * (kF + kF4 + 6 * kF + 6 * kF);
@@ -57,9 +58,10 @@ double adapt_test(const LayoutSizes& s) {
 }
 
 // Lines of one element's row, each array's entry on its own line (random access in SoA): a
-// vertex's 14 floats x, v, m, n, f, ksum, its g, g_next, rest position (3), counts (2),
-// lid, phys, and its four adjacency rows; an edge's 12 arrays; a triangle's 10.
-double vertex_lines(const LayoutSizes& s) { return 23 + 2 * list_lines(s.stride_e) + 2 * list_lines(s.stride_t); }
+// vertex's 14 floats x, v, m, n, f, ksum, its g, g_next, rest position (3), counts (2), rooms
+// (2), lid, phys, and its four adjacency lists (each: block start and block); an edge's 12 arrays;
+// a triangle's 10.
+double vertex_lines(const LayoutSizes& s) { return 25 + 2 * list_lines(s.room_e) + 2 * list_lines(s.room_t); }
 constexpr double kEdgeLines = 12, kTriangleLines = 10;
 constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
 
@@ -78,7 +80,7 @@ double topology_apply(const LayoutSizes& s, double events) {
 
 // relayout reads every array of every element and writes it permuted: twice the whole state.
 double layout(const LayoutSizes& s) {
-  const double vertex = 14 * kF + 2 * kF4 + 3 * kF + 2 * kU16 + 2 * kI + 2 * list_row(s.stride_e) + 2 * list_row(s.stride_t);
+  const double vertex = 14 * kF + 2 * kF4 + 3 * kF + 4 * kU16 + 2 * kI + 2 * list_row(s.room_e) + 2 * list_row(s.room_t);
   const double edge = 6 * kI + kF + kU8 + kI + kOut + 2 * kI;
   const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
@@ -90,8 +92,10 @@ LayoutSizes layout_sizes(const fast::Topology& m) {
   s.vertices = m.V.size();
   s.edges = m.E.size();
   s.triangles = m.T.size();
-  s.stride_e = m.V.stride_e;
-  s.stride_t = m.V.stride_t;
+  if (s.vertices > 0) {
+    s.room_e = double(m.V.springs.size()) / s.vertices;
+    s.room_t = double(m.V.tris.size()) / s.vertices;
+  }
   return s;
 }
 

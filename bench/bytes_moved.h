@@ -5,9 +5,10 @@
 // The count is a floor of the traffic given the data layout, not a model of the caches: every
 // array a pass reads or writes counts its element size once per element it covers, and data
 // read at random through indices (a neighbour's position, an edge's output record) counts once
-// per distinct element, as if every reuse hit the cache. Adjacency lists live in fixed-stride
-// rows, and a pass that walks a vertex's list counts the whole row (stride x 4 bytes: one cache
-// line at the usual stride of 16), since that is the memory the layout makes it touch. Element
+// per distinct element, as if every reuse hit the cache. Adjacency lists live in per-vertex
+// blocks of two pools, packed in vertex order, and a pass that walks a vertex's lists counts its
+// block start and the mean block (pool entries per vertex slot x 4 bytes, garbage included),
+// since that is the memory the layout makes it touch. Element
 // counts are slots (live and dead): every kernel runs over all slots. bytes_moved.cpp gives
 // each pass's formula.
 #pragma once
@@ -24,10 +25,10 @@ class Topology;
 
 namespace crumple::bench {
 
-/// What the counts depend on: the topology's slot counts and adjacency strides.
+/// What the counts depend on: the topology's slot counts and adjacency pool sizes.
 struct LayoutSizes {
   double vertices = 0, edges = 0, triangles = 0;  ///< slots
-  int stride_e = 16, stride_t = 16;               ///< adjacency slots per vertex
+  double room_e = 8, room_t = 8;                  ///< springs / tris pool entries per vertex slot
 };
 
 LayoutSizes layout_sizes(const fast::Topology& m);

@@ -197,7 +197,7 @@ int FastSimulator::apply_splits() {
   std::vector<int>& involved = s.involved;  // vertices of accepted splits (i, j, l, r), once each
   std::vector<SplitCandidate>& candidates = s.split_candidates;
   involved.clear();
-  int rounds = 0, need_springs = 0, need_tris = 0;
+  int rounds = 0;
   // What the serial pre-pass needs of each candidate, read in parallel into a compact array
   // (the pre-pass then touches only it, the stamps and the rounds).
   candidates.resize(s.splits.size());
@@ -236,10 +236,9 @@ int FastSimulator::apply_splits() {
     round_of.push_back(round);
   }
   topo_.fit();  // the slots plan_split took
-  // Room in the adjacency lists for every append, so that no list widens while rounds run: a
+  // Room in the adjacency lists for every append, so that no block moves while rounds run: a
   // split adds one spring at each of i, j, l, r and, net, one triangle at l and at r (i and j
-  // lose their two triangles before they gain two). Exact, so strides widen when the serial
-  // order would have widened them, not earlier (a wider stride slows every gather).
+  // lose their two triangles before they gain two).
   for (const SplitPlan& p : plans) {
     for (int v : p.ends)
       if (v >= 0) ++spring_adds_[v];
@@ -247,11 +246,9 @@ int FastSimulator::apply_splits() {
       if (v >= 0) ++tri_adds_[v];
   }
   for (int v : involved) {
-    need_springs = std::max(need_springs, m.V.n_springs[v] + spring_adds_[v]);
-    need_tris = std::max(need_tris, m.V.n_tris[v] + tri_adds_[v]);
+    topo_.make_room(v, m.V.n_springs[v] + spring_adds_[v], m.V.n_tris[v] + tri_adds_[v]);
     round_last_[v] = spring_adds_[v] = tri_adds_[v] = 0;
   }
-  topo_.make_room(std::max(need_springs, 4), std::max(need_tris, 4));
   // The rounds, each a parallel loop over its splits (in event order within the round).
   std::vector<int>&by_round = s.by_round, &start = s.start;
   by_round.resize(plans.size());

@@ -47,13 +47,12 @@ Totals FastSimulator::totals() const {
 double FastSimulator::stiffness_bound() const {
   // Over each vertex's spring list (no scatter); the max does not depend on the order.
   const Vertices& V = topo_.V;
-  const int stride = V.stride_e;
   double mu = 0;
   for (int v = 0; v < V.size(); ++v) {
     if (!(V.m[v] > 0)) continue;
     double row = 0;
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const double mi = V.m[v], mj = V.m[V.nbrs[std::size_t(v) * stride + k]];
+      const double mi = V.m[v], mj = V.m[topo_.nbrs_of(v)[k]];
       row += (mi + mj) * (1 / mi + 1 / std::sqrt(mi * mj));
     }
     mu = std::max(mu, row);

@@ -51,9 +51,10 @@ namespace {
 // Sums over adjacency lists. The first kFixed entries of a list are summed in a loop of fixed
 // length, entries past the list's count reading a zero record instead (adding an exact 0
 // changes no sum: a sum that starts at +0 never becomes -0): valences vary from 3 to 20, and
-// a loop that ends at the count mispredicts its exit once per list. Lists have room for at
-// least kFixed entries (strides start at 16 and only widen).
+// a loop that ends at the count mispredicts its exit once per list. Every list's block has room
+// for at least kFixed entries (kMinRoom, topology.h), so reading them needs no bounds test.
 constexpr int kFixed = 8;
+static_assert(kFixed <= kMinRoom);
 alignas(64) const EdgeOut kZeroRow{};
 const Float4 kZero4{};
 using Row4 = Wide<4>;
@@ -78,14 +79,14 @@ void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, 
 }  // namespace
 
 void vertex_normals(Topology& m, int begin, int end) {
-  const int stride = m.V.stride_t;
+  const std::int32_t* __restrict at = m.V.at_t.data();
   const std::int32_t* __restrict tris = m.V.tris.data();
   const std::uint16_t* __restrict count = m.V.n_tris.data();
   const Float4* __restrict area = m.T.area.data();
   float *__restrict nx = m.V.nx.data(), *__restrict ny = m.V.ny.data(), *__restrict nz = m.V.nz.data();
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
-    const std::int32_t* list = tris + std::size_t(v) * stride;
+    const std::int32_t* list = tris + at[v];
     const int n = count[v];
     for_list(list, n, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
     const float sx = sum[0], sy = sum[1], sz = sum[2];
@@ -158,21 +159,20 @@ const Row kAsWing{{0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 0}};
 
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
-  const int se = V.stride_e, st = V.stride_t;
   const EdgeOut* __restrict out = m.E.out.data();
   for (int v = begin; v < end; ++v) {
     if (v + kAhead < end) {
-      const std::size_t a = std::size_t(v + kAhead);
-      prefetch_list(out, &V.springs[a * se], V.n_springs[a], 1);
-      prefetch_list(out, &V.wings[a * st], V.n_tris[a], 0);
+      const int a = v + kAhead;
+      prefetch_list(out, &V.springs[V.at_e[a]], V.n_springs[a], 1);
+      prefetch_list(out, &V.wings[V.at_t[a]], V.n_tris[a], 0);
     }
     Row sum = Row::zero();
-    const std::int32_t* springs = &V.springs[std::size_t(v) * se];
+    const std::int32_t* springs = &V.springs[V.at_e[v]];
     const int ns = V.n_springs[v], nt = V.n_tris[v];
     for_list(springs, ns, [&](int x, bool in) {
       sum += Row::load(in ? &out[x >> 1] : &kZeroRow) * kAsEndpoint[x & 1];
     });
-    const std::int32_t* wings = &V.wings[std::size_t(v) * st];  // v is a wing of the edge opposite it
+    const std::int32_t* wings = &V.wings[V.at_t[v]];  // v is a wing of the edge opposite it
     for_list(wings, nt, [&](int x, bool in) { sum += Row::load(in ? &out[x] : &kZeroRow) * kAsWing; });
     float fx = sum[0], fy = sum[1], fz = sum[2];
     const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of W_e (v_other - v_v)
@@ -200,12 +200,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
 
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
-  const int se = V.stride_e;
   const Float4* __restrict g = V.g.data();
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
     const float mass = V.m[v];
-    const std::int32_t* nbrs = &V.nbrs[std::size_t(v) * se];
+    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     const int n = V.n_springs[v];
     auto add = [&](const Float4* p) {
       const Row4 o = Row4::load(p);

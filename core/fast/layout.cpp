@@ -98,12 +98,10 @@ template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
 template <> Array<std::uint16_t>& spare(LayoutScratch& s) { return s.spare_u16; }
 template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
 
-/// a[new] = f(a[order[new]]), `width` items per slot (for the adjacency lists: only the first
-/// count[new] of them, the rest of a list's room is never read): gathered into the spare
-/// buffer, which then swaps with a (keeping a's reserved room).
+/// a[new] = f(a[order[new]]): gathered into the spare buffer, which then swaps with a (keeping
+/// a's reserved room).
 template <class T, class F>
-void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order, F f, int width = 1,
-             const Array<std::uint16_t>* count = nullptr) {
+void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order, F f) {
   Array<T>& out = spare<T>(s);
   if (out.capacity() < a.capacity()) out.reserve(a.capacity());
   out.resize(a.size());
@@ -113,9 +111,8 @@ void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vect
     for (int k = b; k < e; ++k) {
       // The sources are scattered (new elements sit at the end until a relayout): fetch them
       // ahead. (Prefetching the renaming tables' entries as well measured slower.)
-      if (k + kAhead < e) __builtin_prefetch(&src[std::size_t(order[k + kAhead]) * width]);
-      const int used = count ? (*count)[k] : width;
-      for (int w = 0; w < used; ++w) dst[std::size_t(k) * width + w] = f(src[std::size_t(order[k]) * width + w]);
+      if (k + kAhead < e) __builtin_prefetch(&src[order[k + kAhead]]);
+      dst[k] = f(src[order[k]]);
     }
   });
   a.swap(out);
@@ -123,6 +120,43 @@ void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vect
 template <class T>
 void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order) {
   permute(par, s, a, order, [](const T& v) { return v; });
+}
+
+/// Repacks one adjacency pool (list) and its parallel pool in the new vertex order: the vertex
+/// now in slot k gets a block of room_for(count[k]) entries (count already permuted), the blocks
+/// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
+/// left. f and g rename the entries of list and parallel.
+template <class F, class G>
+void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Array<std::int32_t>& parallel,
+            Array<std::int32_t>& at, Array<std::uint16_t>& room, const Array<std::uint16_t>& count,
+            const std::vector<int>& order, F f, G g) {
+  const int n = int(order.size());
+  s.at_old.resize(n);
+  par.run(n, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) s.at_old[k] = at[order[k]];
+  });
+  std::int64_t total = 0;  // a serial prefix sum: a few ns per vertex, and relayout is rare
+  for (int k = 0; k < n; ++k) {
+    room[k] = std::uint16_t(room_for(count[k]));
+    at[k] = std::int32_t(total);
+    total += room[k];
+  }
+  auto copy = [&](Array<std::int32_t>& pool, auto rename) {
+    Array<std::int32_t>& out = spare<std::int32_t>(s);
+    if (out.capacity() < pool.capacity()) out.reserve(pool.capacity());
+    out.resize(std::size_t(total));
+    const std::int32_t* src = pool.data();
+    std::int32_t* dst = out.data();
+    par.run(n, kGrain, [&](int b, int e) {
+      for (int k = b; k < e; ++k) {
+        if (k + kAhead < e) __builtin_prefetch(&src[s.at_old[k + kAhead]]);
+        for (int w = 0; w < count[k]; ++w) dst[at[k] + w] = rename(src[s.at_old[k] + w]);
+      }
+    });
+    pool.swap(out);
+  };
+  copy(list, f);
+  copy(parallel, g);
 }
 
 /// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
@@ -174,7 +208,7 @@ LayoutScratch::LayoutScratch(const LayoutScratch& o) { *this = o; }
 LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   if (this == &o) return *this;
   vorder = o.vorder, vnew = o.vnew, eorder = o.eorder, enew = o.enew, torder = o.torder, tnew = o.tnew;
-  key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2;
+  key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2, at_old = o.at_old;
   copy_warm(spare_f, o.spare_f);
   copy_warm(spare_i, o.spare_i);
   copy_warm(spare_u8, o.spare_u8);
@@ -223,12 +257,11 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   permute(par, s, V.n_springs, vorder);
   permute(par, s, V.n_tris, vorder);
   permute(par, s, V.lid, vorder);
-  permute(par, s, V.springs, vorder, [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); }, V.stride_e,
-          &V.n_springs);
-  permute(par, s, V.nbrs, vorder, vmap, V.stride_e, &V.n_springs);
-  permute(par, s, V.tris, vorder, [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, V.stride_t,
-          &V.n_tris);
-  permute(par, s, V.wings, vorder, emap, V.stride_t, &V.n_tris);
+  repack(par, s, V.springs, V.nbrs, V.at_e, V.room_e, V.n_springs, vorder,
+         [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); }, vmap);
+  repack(par, s, V.tris, V.wings, V.at_t, V.room_t, V.n_tris, vorder,
+         [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, emap);
+  V.garbage_e = V.garbage_t = 0;
 
   // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
   // itself, as the topology's convention says.

@@ -35,6 +35,7 @@ struct LayoutScratch {
   LayoutScratch& operator=(const LayoutScratch& o);
 
   std::vector<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
+  std::vector<std::int32_t> at_old;  ///< each vertex's old block start, by new slot (repacking)
   std::vector<std::uint64_t> code, code2;
   Array<float> spare_f;
   Array<std::int32_t> spare_i;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <stdexcept>
 #include <sstream>
 
 namespace crumple::fast {
@@ -35,11 +36,9 @@ void reserve_all(std::size_t n, A&... arrays) {
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next,
-              V.rx, V.ry, V.rz, V.n_springs, V.n_tris, V.lid, V.phys);
-  V.springs.reserve_warm(nv * V.stride_e);
-  V.nbrs.reserve_warm(nv * V.stride_e);
-  V.tris.reserve_warm(nv * V.stride_t);
-  V.wings.reserve_warm(nv * V.stride_t);
+              V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
+  // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
+  reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
 }
@@ -72,6 +71,7 @@ int Topology::new_vertex() {
   return v;
 }
 
+// A vertex slot keeps its blocks when it is released and reused: only new slots get blocks (fit).
 void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
 
 int Topology::take_vertex() { return take_slot(V); }
@@ -80,12 +80,28 @@ int Topology::take_edge() { return take_slot(E); }
 
 int Topology::take_triangle() { return take_slot(T); }
 
+namespace {
+/// Appends a block of `room` entries to a pool and its parallel pool; returns its start.
+std::int32_t append_block(Array<std::int32_t>& list, Array<std::int32_t>& parallel, std::size_t room) {
+  const std::size_t at = list.size();
+  if (at + room > std::size_t(INT32_MAX)) throw std::length_error("adjacency pool exceeds 2^31 entries");
+  grow(at + room, list, parallel);
+  return std::int32_t(at);
+}
+}  // namespace
+
 void Topology::fit() {
-  if (const std::size_t n = V.lid.size(); n != V.m.size()) {
+  if (const std::size_t n = V.lid.size(), old = V.m.size(); n != old) {
     grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.rx,
-         V.ry, V.rz, V.n_springs, V.n_tris);
-    grow(n * V.stride_e, V.springs, V.nbrs);
-    grow(n * V.stride_t, V.tris, V.wings);
+         V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
+    // One block of the least room per new slot, in slot order.
+    const std::int32_t at_e = append_block(V.springs, V.nbrs, (n - old) * kMinRoom);
+    const std::int32_t at_t = append_block(V.tris, V.wings, (n - old) * kMinRoom);
+    for (std::size_t v = old; v < n; ++v) {
+      V.at_e[v] = at_e + std::int32_t((v - old) * kMinRoom);
+      V.at_t[v] = at_t + std::int32_t((v - old) * kMinRoom);
+      V.room_e[v] = V.room_t[v] = kMinRoom;
+    }
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
   if (const std::size_t n = E.lid.size(); n != E.a.size())
@@ -168,9 +184,27 @@ int Topology::take_record() {
   return int(records.size()) - 1;
 }
 
-void Topology::make_room(int springs, int tris) {
-  while (V.stride_e < springs) widen(true);
-  while (V.stride_t < tris) widen(false);
+void Topology::make_room(int v, int springs, int tris) {
+  if (springs > V.room_e[v]) move_block(v, true, springs);
+  if (tris > V.room_t[v]) move_block(v, false, tris);
+}
+
+void Topology::move_block(int v, bool springs, int need) {
+  if (need > kMaxRoom)
+    throw std::length_error("a vertex has more than " + std::to_string(kMaxRoom) + (springs ? " springs" : " triangles"));
+  Array<std::int32_t>& list = springs ? V.springs : V.tris;
+  Array<std::int32_t>& parallel = springs ? V.nbrs : V.wings;
+  std::int32_t& at = springs ? V.at_e[v] : V.at_t[v];
+  std::uint16_t& room = springs ? V.room_e[v] : V.room_t[v];
+  const int count = springs ? V.n_springs[v] : V.n_tris[v];
+  // Doubling: a list that grows one entry at a time moves O(log valence) times.
+  const int wider = std::min(kMaxRoom, std::max(room_for(need), 2 * int(room)));
+  const std::int32_t to = append_block(list, parallel, std::size_t(wider));
+  std::copy_n(&list[std::size_t(at)], count, &list[std::size_t(to)]);
+  std::copy_n(&parallel[std::size_t(at)], count, &parallel[std::size_t(to)]);
+  (springs ? V.garbage_e : V.garbage_t) += room;
+  at = to;
+  room = std::uint16_t(wider);
 }
 
 int Topology::mesh_edge(int a, int b) const {
@@ -211,39 +245,27 @@ void Topology::detach(int t) {
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
 }
 
+// Appends move a full list first, which only serial code may do: parallel edits reserve room
+// beforehand (make_room), so that an append never moves a block while another thread reads.
 void Topology::list_spring(int v, int entry, int other) {
-  if (V.n_springs[v] == V.stride_e) widen(true);
-  const std::size_t slot = std::size_t(v) * V.stride_e + V.n_springs[v]++;
+  if (V.n_springs[v] == V.room_e[v]) move_block(v, true, V.n_springs[v] + 1);
+  const std::size_t slot = std::size_t(V.at_e[v]) + V.n_springs[v]++;
   V.springs[slot] = entry;
   V.nbrs[slot] = other;
 }
 void Topology::unlist_spring(int v, int entry) {
-  const std::size_t base = std::size_t(v) * V.stride_e;
+  const std::size_t base = std::size_t(V.at_e[v]);
   erase_slot(&V.springs[base], &V.nbrs[base], V.n_springs[v], entry);
 }
 void Topology::list_tri(int v, int entry, int wing_edge) {
-  if (V.n_tris[v] == V.stride_t) widen(false);
-  const std::size_t slot = std::size_t(v) * V.stride_t + V.n_tris[v]++;
+  if (V.n_tris[v] == V.room_t[v]) move_block(v, false, V.n_tris[v] + 1);
+  const std::size_t slot = std::size_t(V.at_t[v]) + V.n_tris[v]++;
   V.tris[slot] = entry;
   V.wings[slot] = wing_edge;
 }
 void Topology::unlist_tri(int v, int entry) {
-  const std::size_t base = std::size_t(v) * V.stride_t;
+  const std::size_t base = std::size_t(V.at_t[v]);
   erase_slot(&V.tris[base], &V.wings[base], V.n_tris[v], entry);
-}
-
-void Topology::widen(bool springs) {
-  int& stride = springs ? V.stride_e : V.stride_t;
-  const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
-  for (Array<std::int32_t>* list : springs ? std::array{&V.springs, &V.nbrs} : std::array{&V.tris, &V.wings}) {
-    Array<std::int32_t> wider;
-    wider.reserve_warm(V.m.capacity() * stride * 2);  // the room the old list had, per vertex
-    wider.resize(std::size_t(V.size()) * stride * 2);
-    for (int v = 0; v < V.size(); ++v)
-      std::copy_n(&(*list)[std::size_t(v) * stride], count[v], &wider[std::size_t(v) * stride * 2]);
-    list->swap(wider);
-  }
-  stride *= 2;
 }
 
 int Topology::live_vertices() const {
@@ -257,7 +279,39 @@ int Topology::live_auxiliary() const {
 }
 int Topology::live_triangles() const { return T.size() - int(T.free_ids.size()); }
 
+std::string Topology::check_blocks() const {
+  const char* names[2] = {"springs", "tris"};
+  for (int which = 0; which < 2; ++which) {
+    const bool springs = which == 0;
+    const Array<std::int32_t>& at = springs ? V.at_e : V.at_t;
+    const Array<std::uint16_t>& room = springs ? V.room_e : V.room_t;
+    const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
+    const std::size_t pool = springs ? V.springs.size() : V.tris.size();
+    const std::size_t parallel = springs ? V.nbrs.size() : V.wings.size();
+    const std::string name = names[which];
+    if (parallel != pool) return "the " + name + " pool and its parallel pool differ in size";
+    if (at.size() != std::size_t(V.size()) || room.size() != at.size() || count.size() != at.size())
+      return "the " + name + " blocks are not one per vertex slot";
+    std::vector<std::pair<std::int64_t, int>> blocks;
+    std::int64_t total = springs ? V.garbage_e : V.garbage_t;
+    for (int v = 0; v < V.size(); ++v) {
+      if (room[v] < kMinRoom || count[v] > room[v] || at[v] < 0 || std::size_t(at[v]) + room[v] > pool)
+        return "vertex " + std::to_string(v) + "'s " + name + " block is out of bounds or too small";
+      blocks.emplace_back(at[v], room[v]);
+      total += room[v];
+    }
+    if (std::size_t(total) != pool)
+      return "the " + name + " pool holds " + std::to_string(pool) + " entries, its blocks and garbage " +
+             std::to_string(total);
+    std::sort(blocks.begin(), blocks.end());
+    for (std::size_t k = 1; k < blocks.size(); ++k)
+      if (blocks[k - 1].first + blocks[k - 1].second > blocks[k].first) return "two " + name + " blocks overlap";
+  }
+  return {};
+}
+
 std::string Topology::check() const {
+  if (std::string blocks = check_blocks(); !blocks.empty()) return blocks;
   std::ostringstream err;
   auto fail = [&](auto&&... parts) {
     (err << ... << parts);

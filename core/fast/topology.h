@@ -12,11 +12,18 @@
 // mass 0, no adjacency, an edge in no list joining vertex 0 to itself (zero length, no force).
 //
 // Adjacency is what makes every force pass a race-free *gather*: each vertex lists its springs
-// and its triangles in fixed-stride slots (one cache line for typical valences); the stride
-// doubles, re-laid out once, when a vertex outgrows it. List order only changes by appending
-// and by order-preserving erase, so every sum over a list has one order on any thread count.
+// and its triangles, each list in a block of its own in a pool shared by all vertices (a block
+// holds at least kMinRoom entries, so a kernel may read the first kMinRoom of any list without a
+// bounds test). A list that outgrows its block moves to a new block, twice as large, at the end
+// of its pool, leaving the old one as garbage until relayout() repacks the pools in vertex order,
+// every block sized to its list: memory follows each vertex's own valence (one vertex of valence
+// 10,000 costs its own list, not a stride for every vertex), and neighbouring vertices' lists
+// share cache lines. Blocks move only in serial code (the split rounds reserve room first).
+// List order only changes by appending and by order-preserving erase, so every sum over a list
+// has one order on any thread count.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -25,6 +32,14 @@
 #include "fast/aligned.h"
 
 namespace crumple::fast {
+
+/// Every adjacency block holds at least this many entries (kernels read this many unguarded).
+constexpr int kMinRoom = 8;
+/// The most entries one list may hold (the counts are 16-bit).
+constexpr int kMaxRoom = 65535;
+/// The block a list of `count` entries gets when the pools are repacked: at least kMinRoom, two
+/// entries to grow into, a multiple of four entries (16 bytes).
+inline int room_for(int count) { return std::min(kMaxRoom, std::max(kMinRoom, (count + 5) & ~3)); }
 
 /// Edge flags.
 enum : std::uint8_t {
@@ -83,17 +98,19 @@ struct Vertices {
   Array<Float4> g_next;      ///< the next sweep's guess (double buffer)
   // cold
   Array<float> rx, ry, rz;   ///< rest position X_k
-  // adjacency (see the file comment)
-  Array<std::int32_t> springs;    ///< per vertex: stride_e slots of (edge << 1 | vertex is b)
-  Array<std::int32_t> nbrs;       ///< per vertex: the other endpoint of each spring slot
-  Array<std::int32_t> tris;       ///< per vertex: stride_t slots of (triangle << 2 | corner)
-  Array<std::int32_t> wings;      ///< per vertex: the edge opposite it in each triangle slot
-  Array<std::uint16_t> n_springs; ///< used slots in springs
-  Array<std::uint16_t> n_tris;    ///< used slots in tris
+  // adjacency (see the file comment): two pools of blocks, each with a parallel pool
+  Array<std::int32_t> springs;    ///< pool of spring lists: (edge << 1 | vertex is b)
+  Array<std::int32_t> nbrs;       ///< parallel to springs: the other endpoint
+  Array<std::int32_t> tris;       ///< pool of triangle lists: (triangle << 2 | corner)
+  Array<std::int32_t> wings;      ///< parallel to tris: the edge opposite the vertex
+  Array<std::int32_t> at_e, at_t; ///< start of each vertex's block in springs / tris
+  Array<std::uint16_t> room_e, room_t;  ///< entries of each vertex's block (>= kMinRoom)
+  Array<std::uint16_t> n_springs; ///< entries used in the springs block
+  Array<std::uint16_t> n_tris;    ///< entries used in the tris block
   Array<std::int32_t> lid;        ///< logical id of each slot
   Array<std::int32_t> phys;       ///< slot of each logical id (the inverse of lid)
-  int stride_e = 16;              ///< slots per vertex in springs
-  int stride_t = 16;              ///< slots per vertex in tris
+  std::int64_t garbage_e = 0;     ///< springs pool entries in blocks a list moved out of
+  std::int64_t garbage_t = 0;     ///< the same for the tris pool
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
   std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
@@ -161,8 +178,9 @@ class Topology {
   void init_vertex(int v);
   void init_edge(int e, int a, int b, float l0);
   void init_triangle(int t);
-  /// Widens the adjacency strides until a list can hold this many springs / triangles.
-  void make_room(int springs, int tris);
+  /// Moves v's lists to larger blocks if they cannot hold this many springs / triangles
+  /// (serial: a move appends to a pool). Throws std::length_error past kMaxRoom.
+  void make_room(int v, int springs, int tris);
   // Freeing is release_X (clears the slot: may run in parallel for elements of disjoint
   // vertices), then free_ids, which puts the released ids on the free lists (serial, in event
   // order).
@@ -185,17 +203,18 @@ class Topology {
   std::string check() const;  ///< empty if consistent
 
   // Adjacency access.
-  const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(v) * V.stride_e]; }
-  const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(v) * V.stride_t]; }
-  const std::int32_t* nbrs_of(int v) const { return &V.nbrs[std::size_t(v) * V.stride_e]; }
-  const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(v) * V.stride_t]; }
+  const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(V.at_e[v])]; }
+  const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(V.at_t[v])]; }
+  const std::int32_t* nbrs_of(int v) const { return &V.nbrs[std::size_t(V.at_e[v])]; }
+  const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(V.at_t[v])]; }
 
  private:
   void list_spring(int v, int entry, int other);
   void unlist_spring(int v, int entry);
   void list_tri(int v, int entry, int wing_edge);
   void unlist_tri(int v, int entry);
-  void widen(bool springs);  ///< doubles a stride, keeping every list's order
+  void move_block(int v, bool springs, int need);  ///< v's list to a new block of room >= need
+  std::string check_blocks() const;                 ///< empty if the pools are consistent
 };
 
 }  // namespace crumple::fast

@@ -260,5 +260,53 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
   }
 }
 
+// Issue 14, defect 1: adjacency memory followed the largest valence (one stride for every
+// vertex), so a fan disk with one vertex of valence 10,000 took 4.5 GB. With per-vertex blocks
+// the pools hold about kMinRoom entries per vertex plus the hub's own list (about twice it,
+// doubling leaves the smaller blocks behind), before and after a relayout repacks them.
+// Catches: a per-vertex stride sized by the largest list; a repack that leaves garbage or
+// sizes blocks by anything but each vertex's own count.
+TEST(FastTopology, AdjacencyMemoryFollowsEachVertexsValence) {
+  constexpr int kRim = 10000;
+  InputMesh fan;
+  fan.positions.push_back({0, 0, 0});
+  for (int k = 0; k < kRim; ++k) {
+    const double a = 2 * M_PI * k / kRim;
+    fan.positions.push_back({std::cos(a), std::sin(a), 0});
+  }
+  for (int k = 0; k < kRim; ++k) fan.triangles.push_back({0, 1 + k, 1 + (k + 1) % kRim});
+  Params p;
+  p.fracture = false;  // one frame of the hub's springs, no refinement needed
+  fast::FastSimulator sim(fan, p, 2);
+  const fast::Vertices& V = sim.topology().V;
+  const double nv = V.size();
+  const double bound = 2 * fast::kMinRoom * nv + 4.0 * kRim;
+  EXPECT_LT(double(V.springs.size()), bound);
+  EXPECT_LT(double(V.tris.size()), bound);
+  sim.step();
+  ASSERT_EQ(sim.check_topology(), "");
+  sim.run_pass(fast::Pass::Layout);
+  ASSERT_EQ(sim.check_topology(), "");
+  std::size_t want_e = 0, want_t = 0;
+  for (int v = 0; v < V.size(); ++v) want_e += fast::room_for(V.n_springs[v]), want_t += fast::room_for(V.n_tris[v]);
+  EXPECT_EQ(V.springs.size(), want_e);
+  EXPECT_EQ(V.tris.size(), want_t);
+  EXPECT_EQ(V.garbage_e + V.garbage_t, 0);
+}
+
+// The topology check sees the pools: a block that overlaps another, or a count past its room,
+// is reported (it guards every edit of the tests above). Catches: a check_blocks that accepts
+// overlapping or overfull blocks.
+TEST(FastTopology, CheckFindsOverlappingAndOverfullBlocks) {
+  const fast::FastSimulator sim(make_grid(6), Params{}, 1);
+  ASSERT_EQ(sim.topology().check(), "");
+  fast::Topology overlap = sim.topology();
+  overlap.V.at_e[1] = overlap.V.at_e[0] + 1;
+  EXPECT_NE(overlap.check().find("overlap"), std::string::npos) << overlap.check();
+  fast::Topology overfull = sim.topology();
+  overfull.V.n_tris[3] = std::uint16_t(overfull.V.room_t[3] + 1);
+  EXPECT_NE(overfull.check().find("block"), std::string::npos) << overfull.check();
+}
+
 }  // namespace
 }  // namespace crumple::test
