@@ -193,7 +193,7 @@ int FastSimulator::apply_splits() {
   plans.clear(), round_of.clear();
   // Per-vertex scratch, all 0 between passes (reset below for the vertices used): no pass
   // clears or allocates an array the size of the mesh.
-  for (std::vector<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(nv0), 0);
+  for (Array<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(nv0), 0);
   std::vector<int>& involved = s.involved;  // vertices of accepted splits (i, j, l, r), once each
   std::vector<SplitCandidate>& candidates = s.split_candidates;
   involved.clear();

@@ -34,6 +34,10 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   // Refinement grows a mesh about 4x at the default floor: room for that up front.
   const std::size_t room = (params_.fracture ? 4 : 1);
   topo_.reserve(room * nv, room * 2 * nt, room * nt);
+  for (Array<std::uint8_t>* a : {&decisions_, &by_id_}) a->reserve_warm(room * 2 * nt);
+  tri_stamp_.reserve_warm(room * nt);
+  vertex_stamp_.reserve_warm(room * nv);
+  for (Array<int>* a : {&round_last_, &spring_adds_, &tri_adds_, &claim_}) a->reserve_warm(room * nv);
   for (int k = 0; k < nv; ++k) {
     const int v = topo_.new_vertex();
     topo_.V.rx[v] = float(scene_.rest[k][0]);

@@ -160,14 +160,16 @@ class FastSimulator final : public Simulator {
   Topology topo_;
   double time_ = 0;
   std::uint64_t steps_ = 0;
-  std::vector<std::uint8_t> decisions_;   ///< adapt_test output per edge
-  std::vector<std::uint8_t> by_id_;       ///< the nonzero decisions per logical id (0 between passes)
-  std::vector<std::uint64_t> tri_stamp_;  ///< pass that last changed each triangle
-  std::vector<std::uint64_t> vertex_stamp_;  ///< pass that last renewed each vertex normal
-  std::vector<int> round_last_;           ///< per vertex: round of its last split in this pass (0: none)
-  std::vector<int> spring_adds_;          ///< per vertex: springs the splits of this pass add
-  std::vector<int> tri_adds_;             ///< per vertex: triangles the splits of this pass add
-  std::vector<int> claim_;                ///< per vertex: 1 + the restore candidate claiming it in a wave
+  // Per-element scratch of the topology pass, in Arrays like the topology's (a copy keeps their
+  // room, growth is faulted in ahead: D16), reserved with it in the constructor.
+  Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
+  Array<std::uint8_t> by_id_;             ///< the nonzero decisions per logical id (0 between passes)
+  Array<std::uint64_t> tri_stamp_;        ///< pass that last changed each triangle
+  Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
+  Array<int> round_last_;                 ///< per vertex: round of its last split in this pass (0: none)
+  Array<int> spring_adds_;                ///< per vertex: springs the splits of this pass add
+  Array<int> tri_adds_;                   ///< per vertex: triangles the splits of this pass add
+  Array<int> claim_;                      ///< per vertex: 1 + the restore candidate claiming it in a wave
   struct RestoreCandidate {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
     std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)

@@ -41,6 +41,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
+  records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
 
 // A slot for a new element: the newest freed logical id and its slot (LIFO, the id policy of
@@ -181,6 +182,7 @@ int Topology::take_record() {
     return id;
   }
   records.emplace_back();
+  records.keep_warm();
   return int(records.size()) - 1;
 }
 

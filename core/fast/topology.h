@@ -155,7 +155,7 @@ class Topology {
   Vertices V;
   Edges E;
   Triangles T;
-  std::vector<SplitRecord> records;  ///< split records (ids recycled through free_records)
+  Array<SplitRecord> records;        ///< split records (ids recycled through free_records)
   std::vector<int> free_records;     ///< LIFO free list of record ids
   int euler = 0;                     ///< V - E + F of the input, kept by splits and restores
 
