@@ -64,6 +64,13 @@ int main(int argc, char** argv) {
          "steps per frame, or auto: chosen each frame from the mesh's stiffest mode (default 1)");
   run->add_option("--max-step", p.max_step, "--substeps auto: largest step in seconds (0: stability only)")
       ->capture_default_str();
+  run->add_option_function<std::string>(
+         "--adapt",
+         [&p](const std::string& s) {
+           if (s != "step" && s != "frame") throw CLI::ValidationError("--adapt", "must be step or frame, got '" + s + "'");
+           p.adapt_per_frame = s == "frame";
+         },
+         "fracture and restoration after every step (the paper's) or once per frame (default step)");
   run->add_option("--integrator", p.integrator, "approx | explicit | implicit | xpbd")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},

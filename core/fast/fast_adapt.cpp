@@ -77,7 +77,7 @@ void FastSimulator::adapt_decide() {
   c.phi = float(params_.phi);
   c.epsilon = float(params_.epsilon);
   c.floor_length = float(scene_.floor_length);
-  c.step_exponent = float(params_.h() / kReferenceStep);
+  c.step_exponent = float(params_.adapt_interval() / kReferenceStep);
   c.seed = params_.seed;
   c.step = steps_;
   c.fracture = params_.fracture;
@@ -449,7 +449,7 @@ double FastSimulator::margin(int e) const {
   if (!(f & kBreakable) || E.l0[e] < scene_.floor_length || !(lt < E.l0[e])) return -u;
   const double c = 1.0 - lt / E.l0[e];
   const double P = std::clamp(0.25 * c * (1 - params_.phi * dot_n(a, b)) * (1 + params_.phi * n_rl), 0.0, 1.0);
-  return 1.0 - std::pow(1.0 - P, params_.h() / kReferenceStep) - u;
+  return 1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep) - u;
 }
 
 bool FastSimulator::split(int id) {

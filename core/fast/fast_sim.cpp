@@ -143,7 +143,8 @@ StepEvents FastSimulator::step() {
   integrate();
   time_ += params_.h();
   apply_manipulators();
-  const StepEvents ev = adapt();
+  StepEvents ev;
+  if (adapt_clock_.tick(params_)) ev = adapt();
   if (!manip_.empty()) {  // a split's new vertex may land inside an obstacle
     apply_manipulators();
     normals_valid_ = false;

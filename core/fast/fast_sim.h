@@ -155,6 +155,7 @@ class FastSimulator final : public Simulator {
   Freed restore_edge_local(int e);
 
   Params params_;
+  AdaptClock adapt_clock_;  ///< which steps run the fracture/restoration pass
   SceneSetup scene_;
   Parallel par_;
   Topology topo_;

@@ -36,6 +36,9 @@ struct Params {
                                          ///< of the current mesh (sim/run.h choose_substeps)
   double max_step = 0;                   ///< auto_substeps: the step is at most this (seconds;
                                          ///< 0: no bound but stability), the accuracy knob
+  bool adapt_per_frame = false;          ///< fracture and restoration once per frame, after its
+                                         ///< last step, with P over the frame (MODEL.md §4;
+                                         ///< docs/DECISIONS.md D24); else after every step
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit
@@ -67,6 +70,8 @@ struct Params {
 
   /// Time step h.
   double h() const { return frame_dt / substeps; }
+  /// The interval one fracture/restoration pass covers: P over it is 1 - (1 - P)^(t / h_ref).
+  double adapt_interval() const { return adapt_per_frame ? frame_dt : h(); }
 
   /// Empty if every value is usable; otherwise one line naming the first bad parameter.
   std::string validate() const;

@@ -36,8 +36,9 @@ void ReferenceSimulator::update_kappa(int v) {
   }
 }
 
-// [Eq 6] P = 1/4 c (1 - phi n_ij)(1 + phi n_rl), c = 1 - lt/l0, made per-time-step as
-// P_step = 1 - (1 - P)^(h / h_ref). Zero for edges that cannot break.
+// [Eq 6] P = 1/4 c (1 - phi n_ij)(1 + phi n_rl), c = 1 - lt/l0, made per pass as
+// P_step = 1 - (1 - P)^(t / h_ref), t the pass's interval (a step, or a frame: D24). Zero for
+// edges that cannot break.
 double ReferenceSimulator::break_probability(int e, const std::vector<V3>& n) const {
   const Edge& E = mesh_.edges[e];
   if (!E.alive || E.auxiliary || !E.breakable || E.l0 < scene_.floor_length) return 0;
@@ -48,7 +49,7 @@ double ReferenceSimulator::break_probability(int e, const std::vector<V3>& n) co
   const double n_ij = n[E.a].dot(n[E.b]);
   const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
   const double P = std::clamp(0.25 * c * (1 - params_.phi * n_ij) * (1 + params_.phi * n_rl), 0.0, 1.0);
-  return 1.0 - std::pow(1.0 - P, params_.h() / kReferenceStep);
+  return 1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep);
 }
 
 bool ReferenceSimulator::split_edge(int e, const std::vector<V3>& n, double flat_draw) {

@@ -45,8 +45,11 @@ StepEvents ReferenceSimulator::step() {
   }
   apply_sphere();
   apply_manipulators();
-  const StepEvents ev = adapt();
-  apply_manipulators();  // a split's new vertex may land inside an obstacle
+  StepEvents ev;
+  if (adapt_clock_.tick(params_)) {
+    ev = adapt();
+    apply_manipulators();  // a split's new vertex may land inside an obstacle
+  }
   ++steps_;
   return ev;
 }

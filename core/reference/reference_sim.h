@@ -80,6 +80,7 @@ class ReferenceSimulator final : public Simulator {
   StepEvents adapt();
 
   Params params_;
+  AdaptClock adapt_clock_;  ///< which steps run the fracture/restoration pass
   SceneSetup scene_;
   Mesh mesh_;
   double time_ = 0;

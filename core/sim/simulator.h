@@ -89,6 +89,24 @@ struct RenderBuffers {
   std::vector<std::uint32_t> triangles; ///< the live triangles' vertex ids, three each, by id
 };
 
+/// When a backend runs its fracture/restoration pass (Params::adapt_per_frame): after every
+/// step, or after the step that completes a frame of simulated time. Both backends keep one, so
+/// they pass at the same steps.
+class AdaptClock {
+ public:
+  /// Counts a step of h; true if the pass runs after it.
+  bool tick(const Params& p) {
+    if (!p.adapt_per_frame) return true;
+    elapsed_ += p.h();
+    if (elapsed_ < p.frame_dt * (1 - 1e-6)) return false;  // S steps of frame_dt / S, rounded
+    elapsed_ = 0;
+    return true;
+  }
+
+ private:
+  double elapsed_ = 0;  ///< simulated time since the last pass
+};
+
 class Simulator {
  public:
   virtual ~Simulator() = default;

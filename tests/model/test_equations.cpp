@@ -227,6 +227,51 @@ TEST_P(Equations, FractureProbabilityPerStepKeepsTheFrameRate) {
                                                << trials * linear << ", P per step " << trials * per_step;
 }
 
+// --adapt frame (D24): with S steps a frame the pass runs once, after the frame's last step,
+// with P over the frame: 1 - (1 - P)^(frame_dt / h_ref) = P at 60 Hz. Counting as above, the
+// rate stays P (catches the step's exponent h/h_ref in a per-frame pass: 1 - (1 - P)^(1/8) =
+// 0.034 a frame) and no split happens before the frame's last step (catches a pass after every
+// step, or a clock that fires early).
+TEST_P(Equations, FractureOncePerFrameCoversTheFrame) {
+  const double scale = 0.05, P = 0.25 * (1 - scale);
+  const int substeps = 8, trials = 4000;
+  Params p = still_params();
+  p.phi = 0;
+  p.floor = 1.0;  // only the diagonal may break (count_breaks)
+  p.substeps = substeps;
+  p.restoration = false;
+  p.adapt_per_frame = true;
+  int breaks = 0, early = 0;
+  for (int seed = 1; seed <= trials; ++seed) {
+    p.seed = std::uint64_t(seed);
+    auto sim = make_simulator(GetParam(), unit_square(), p, 1);
+    sim->set_state(folded_square(0.0, scale), std::vector<Vec3d>(4, Vec3d{}));
+    for (int k = 0; k < substeps; ++k) (k + 1 < substeps ? early : breaks) += sim->step().splits;
+  }
+  EXPECT_EQ(early, 0);
+  EXPECT_NEAR(breaks, trials * P, 4.5 * std::sqrt(trials * P * (1 - P))) << "P " << P;
+}
+
+// With one step a frame, --adapt frame is --adapt step: the same passes with the same
+// probabilities, bit for bit, through a crumple. Catches a per-frame clock that skips a pass
+// at one step a frame, or an interval other than h there.
+TEST_P(Equations, AdaptPerFrameAtOneStepIsThePaperStep) {
+  Params p;
+  auto run = [&](bool per_frame) {
+    p.adapt_per_frame = per_frame;
+    auto sim = make_simulator(GetParam(), make_grid(16), p, 1);
+    long events = 0;
+    for (int f = 0; f < 60; ++f) {
+      const StepEvents ev = sim->step();
+      events += ev.splits + ev.restores;
+    }
+    EXPECT_GT(events, 50);
+    return sim->snapshot();
+  };
+  const Snapshot a = run(false), b = run(true);
+  EXPECT_TRUE(same_snapshot(a, b));
+}
+
 // No break when stretched, when phi = 1 on a flat sheet, or below the refinement floor.
 TEST_P(Equations, NoFractureWhereTheModelForbidsIt) {
   struct Case { double scale, phi, floor; const char* what; };

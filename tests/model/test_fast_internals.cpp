@@ -90,19 +90,6 @@ TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
   }
 }
 
-bool same_snapshot(const Snapshot& a, const Snapshot& b) {
-  if (!(a.position == b.position && a.velocity == b.velocity && a.mass == b.mass && a.rest == b.rest &&
-        a.vertex_alive == b.vertex_alive && a.triangles == b.triangles && a.edges.size() == b.edges.size()))
-    return false;
-  for (std::size_t e = 0; e < a.edges.size(); ++e) {
-    const EdgeView &p = a.edges[e], &q = b.edges[e];
-    if (p.a != q.a || p.b != q.b || p.wing_l != q.wing_l || p.wing_r != q.wing_r || p.rest != q.rest ||
-        p.auxiliary != q.auxiliary || p.breakable != q.breakable)
-      return false;
-  }
-  return true;
-}
-
 /// Asserts two runs had the same events frame by frame, and totals them.
 void same_events(const std::vector<StepEvents>& a, const std::vector<StepEvents>& b, long& splits, long& restores) {
   for (std::size_t f = 0; f < a.size(); ++f) {

@@ -47,6 +47,21 @@ inline std::vector<Vec3d> folded_square(double alpha, double scale) {
   return out;
 }
 
+/// The logical states are equal, bit for bit (positions, velocities, masses, topology).
+inline bool same_snapshot(const Snapshot& a, const Snapshot& b) {
+  if (!(a.position == b.position && a.velocity == b.velocity && a.mass == b.mass && a.rest == b.rest &&
+        a.vertex_alive == b.vertex_alive && a.triangles == b.triangles && a.edges.size() == b.edges.size()))
+    return false;
+  for (std::size_t e = 0; e < a.edges.size(); ++e) {
+    const EdgeView &p = a.edges[e], &q = b.edges[e];
+    if (p.a != q.a || p.b != q.b || p.wing_l != q.wing_l || p.wing_r != q.wing_r || p.rest != q.rest ||
+        p.auxiliary != q.auxiliary || p.breakable != q.breakable)
+      return false;
+  }
+  return true;
+}
+
+
 /// Parameters with every force off (nothing moves unless the test says so).
 inline Params still_params() {
   Params p;
