@@ -193,7 +193,7 @@ C = f"{DEFAULT_C:.6g}"
 METHODS = {
     "paper": (["--integrator", "approx"], "fast", [1]),
     "explicit": (["--integrator", "explicit", "--viscosity", C], "fast", [1, 2, 4, 8, 16]),
-    # the same with fracture and restoration once per frame (D24): the substeps cost physics only
+    # the same with fracture and restoration once per frame (D27): the substeps cost physics only
     "explicit-F": (["--integrator", "explicit", "--viscosity", C, "--adapt", "frame"], "fast", [4, 8, 16, 32, 64]),
     "approx-K1": (["--integrator", "approx", "--viscosity", C], "fast", [1, 2, 4]),
     "axial-K1": (["--integrator", "approx", "--jacobian", "axial", "--viscosity", C], "reference", [1, 2, 4, 8]),

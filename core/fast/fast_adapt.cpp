@@ -74,8 +74,11 @@ constexpr int kWaveGrain = 32;   ///< a restore costs about as much as a split (
 void FastSimulator::adapt_decide() {
   compute_normals();
   AdaptConstants c;
+  const double budget = params_.budget_factor(topo_.live_vertices());  // D22, as the reference
+  c.budget = float(budget);
+  c.unit = length_unit();
   c.phi = float(params_.phi);
-  c.epsilon = float(params_.epsilon);
+  c.epsilon = float(budget * params_.epsilon);
   c.floor_length = float(scene_.floor_length);
   c.step_exponent = float(params_.adapt_interval() / kReferenceStep);
   c.seed = params_.seed;
@@ -89,7 +92,7 @@ void FastSimulator::adapt_decide() {
 StepEvents FastSimulator::adapt_apply() {
   ++pass_;
   collect_events();
-  if (params_.max_vertices > 0) {  // as the reference: the budget's first candidates in event order
+  if (params_.max_vertices > 0) {  // the hard guard, as the reference: the budget's first candidates
     std::vector<int>& splits = scratch_.splits;
     splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - topo_.live_vertices())));
   }
@@ -373,6 +376,7 @@ void FastSimulator::renew_normals() {
   // thread claims it first (each normal is a function of the areas alone, so who computes it
   // and in which order changes nothing).
   const std::vector<int>& changed = scratch_.changed;
+  const float unit = length_unit();
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
   // Both loops prefetch what the changed triangle kNear on reads: its corners' positions, then
   // its corners' triangle lists (the triangle lines themselves, kFar on): renewal 2.4-2.6 ->
@@ -385,7 +389,7 @@ void FastSimulator::renew_normals() {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
       if (k + kNear < e)
         for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.x[v]), prefetch_read(&V.y[v]), prefetch_read(&V.z[v]);
-      triangle_areas(topo_, changed[k], changed[k] + 1);
+      triangle_areas(topo_, unit, changed[k], changed[k] + 1);
     }
   });
   par_.run(int(changed.size()), 512, [&](int b, int e) {
@@ -423,17 +427,19 @@ std::vector<Decision> FastSimulator::decide() const {
   FastSimulator tmp(*this);
   tmp.adapt_decide();
   std::vector<Decision> out(tmp.decisions_.size());
+  const double budget = params_.budget_factor(topo_.live_vertices());
   for (size_t e = 0; e < out.size(); ++e) {
     out[tmp.topo_.E.lid[e]].kind = tmp.decisions_[e];
-    out[tmp.topo_.E.lid[e]].margin = tmp.margin(int(e));
+    out[tmp.topo_.E.lid[e]].margin = tmp.margin(int(e), budget);
   }
   return out;
 }
 
 // Decision::margin as the reference defines it, in double from this backend's float state (a
 // test hook: the kernel decides in float and keeps no margin). Mesh edges: P_step - u [Eq 6];
-// auxiliary edges with a split record: (1 - n_rl)/2 - epsilon [Eq 10].
-double FastSimulator::margin(int e) const {
+// auxiliary edges with a split record: (1 - n_rl)/2 - epsilon [Eq 10]; P_step and epsilon
+// scaled by the budget's factor (D22).
+double FastSimulator::margin(int e, double budget) const {
   const Vertices& V = topo_.V;
   const Edges& E = topo_.E;
   const std::uint8_t f = E.flags[e];
@@ -441,7 +447,7 @@ double FastSimulator::margin(int e) const {
   if (!(f & kAlive)) return 0;  // a dead slot's indices may be stale
   const int a = E.a[e], b = E.b[e], l = E.wl[e], r = E.wr[e];
   const double n_rl = (l >= 0 && r >= 0) ? dot_n(r, l) : 1.0;
-  if (!(f & kMesh)) return (params_.restoration && E.record[e] >= 0) ? (1.0 - n_rl) / 2.0 - params_.epsilon : 0;
+  if (!(f & kMesh)) return (params_.restoration && E.record[e] >= 0) ? (1.0 - n_rl) / 2.0 - budget * params_.epsilon : 0;
   if (!params_.fracture) return 0;
   const double u = uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::Fracture);
   const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
@@ -449,7 +455,7 @@ double FastSimulator::margin(int e) const {
   if (!(f & kBreakable) || E.l0[e] < scene_.floor_length || !(lt < E.l0[e])) return -u;
   const double c = 1.0 - lt / E.l0[e];
   const double P = std::clamp(0.25 * c * (1 - params_.phi * dot_n(a, b)) * (1 + params_.phi * n_rl), 0.0, 1.0);
-  return 1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep) - u;
+  return budget * (1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep)) - u;
 }
 
 bool FastSimulator::split(int id) {

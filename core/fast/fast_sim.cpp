@@ -81,8 +81,17 @@ StepConstants FastSimulator::step_constants() const {
   return c;
 }
 
+// The power of two nearest 1/sheet size: the kernels that multiply or square lengths scale
+// them by it first. Exact (a power of two changes no significand), so results do not change;
+// a mesh of size 1e-12 then computes its areas and lengths as one of size 1 would, where float's
+// subnormals (below 1.2e-38, so areas of edges below ~1e-10) would lose them (D20, issue 14).
+float FastSimulator::length_unit() const {
+  return scene_.size > 0 ? std::ldexp(1.0f, -std::ilogb(scene_.size)) : 1.0f;
+}
+
 void FastSimulator::compute_normals() {
-  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, b, e); });
+  const float unit = length_unit();
+  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, unit, b, e); });
   par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, b, e); });
 }
 

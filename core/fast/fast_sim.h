@@ -141,7 +141,8 @@ class FastSimulator final : public Simulator {
   int apply_restores(); ///< returns the restores applied
   void renew_normals();
   bool touched(int t) const;  ///< triangle t was changed by this pass
-  double margin(int e) const; ///< Decision::margin of slot e on the current normals (decide())
+  float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
+  double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
   void stamp(int t);          ///< marks triangle t changed by this pass
   // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;

@@ -31,20 +31,20 @@ namespace {
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
                          const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
                          const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                         Float4* __restrict area, int begin, int end) {
+                         float unit, Float4* __restrict area, int begin, int end) {
   for (int t = begin; t < end; ++t) {
     const int a = v0[t], b = v1[t], c = v2[t];
-    const float ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
-    const float wx = x[c] - x[a], wy = y[c] - y[a], wz = z[c] - z[a];
+    const float ux = (x[b] - x[a]) * unit, uy = (y[b] - y[a]) * unit, uz = (z[b] - z[a]) * unit;
+    const float wx = (x[c] - x[a]) * unit, wy = (y[c] - y[a]) * unit, wz = (z[c] - z[a]) * unit;
     const float on = alive[t] ? 1.0f : 0.0f;
     area[t] = Float4{on * (uy * wz - uz * wy), on * (uz * wx - ux * wz), on * (ux * wy - uy * wx), 0.0f};
   }
 }
 }  // namespace
 
-void triangle_areas(Topology& m, int begin, int end) {
+void triangle_areas(Topology& m, float unit, int begin, int end) {
   triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.x.data(), m.V.y.data(),
-                      m.V.z.data(), m.T.area.data(), begin, end);
+                      m.V.z.data(), unit, m.T.area.data(), begin, end);
 }
 
 namespace {
@@ -307,29 +307,35 @@ void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const
                 std::uint8_t* __restrict out, int begin, int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
   // The constants as locals: read through c inside the loop they stop it from vectorizing.
-  const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent;
+  const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent,
+              budget = c.budget, unit = c.unit;
   const bool fracture = c.fracture, restoration = c.restoration;
   CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
     const int a = A[e], b = B[e];
     const int l = WL[e] & ~(WL[e] >> 31), r = WR[e] & ~(WR[e] >> 31);  // -1 -> 0, masked below
     const bool two_wings = (WL[e] >= 0) & (WR[e] >= 0);
-    const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
-    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const float comp = 1.0f - lt / l0[e];
+    // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
+    // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
+    // every compressed edge broke at once).
+    const float dx = (x[a] - x[b]) * unit, dy = (y[a] - y[b]) * unit, dz = (z[a] - z[b]) * unit;
+    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = l0[e] * unit;
+    const float comp = 1.0f - lt / rest;
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
     const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // loaded unconditionally:
     const float nrl = two_wings ? dot_rl : 1.0f;  // a conditional load is control flow to GCC
     const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
     // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
     // [0, 1), decides the same for P and its clamp (NaN too), and any clamp (fmin/fmax calls, or
-    // selects, which GCC 12 turns into branches) keeps this loop from vectorizing.
-    const float Pstep = exact_step ? P : 1.0f - std::pow(1.0f - std::fmin(std::fmax(P, 0.0f), 1.0f), exponent);
+    // selects, which GCC 12 turns into branches) keeps this loop from vectorizing. The budget's
+    // factor (D22, in [0, 1]) keeps that true: P <= 1 up to round-off (c <= 1, each bracket <= 2),
+    // and a factor of exactly 1 changes no bit.
+    const float Pstep = budget * (exact_step ? P : 1.0f - std::pow(1.0f - std::fmin(std::fmax(P, 0.0f), 1.0f), exponent));
     // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= floor_length) & (lt < l0[e]);
+    const bool can = fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= floor_length) & (lt < rest);
     const bool breaks = can & (Pstep > 0) & (u < Pstep);
     const bool restores = restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
     out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0 (no selects: see P)

@@ -25,8 +25,10 @@ struct StepConstants {
   bool bounded = true;       ///< bounded predictor (docs/DECISIONS.md D1), else explicit
 };
 
-/// Area vector (x1 - x0) x (x2 - x0) of each triangle (zero for dead ones).          §1
-void triangle_areas(Topology& m, int begin, int end);
+/// Area vector (x1 - x0) x (x2 - x0) of each triangle (zero for dead ones), in units of 1/unit:
+/// the edges are scaled by `unit` (a power of two, FastSimulator::length_unit) before the product,
+/// which changes no normal's bits and keeps a tiny mesh's products out of float's subnormals.  §1
+void triangle_areas(Topology& m, float unit, int begin, int end);
 /// n_v = normalized sum of the area vectors of v's triangles.                         §1
 void vertex_normals(Topology& m, int begin, int end);
 /// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping), the implicit
@@ -52,6 +54,8 @@ struct AdaptConstants {
   float epsilon = 0;         ///< [Eq 10]
   float floor_length = 0;    ///< rest lengths below it never break (MODEL.md §4)
   float step_exponent = 1;   ///< h / h_ref of P_step = 1 - (1 - P)^(h/h_ref)
+  float budget = 1;          ///< the vertex budget's factor on P_step (D22; epsilon comes scaled)
+  float unit = 1;            ///< lengths are compared scaled by it (a power of two; see triangle_areas)
   std::uint64_t seed = 0;    ///< random stream
   std::uint64_t step = 0;    ///< step counter of the stream
   bool fracture = true, restoration = true;

@@ -1,5 +1,6 @@
 #include "model/params.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -39,6 +40,13 @@ std::string Params::validate() const {
     if (!m.empty()) return m;
   }
   return {};
+}
+
+double Params::budget_factor(int live_vertices) const {
+  if (max_vertices <= 0) return 1.0;
+  const double start = kBudgetSoftStart * max_vertices;
+  if (live_vertices <= start) return 1.0;  // exactly 1: far from the budget nothing changes
+  return std::max(0.0, (max_vertices - live_vertices) / (max_vertices - start));
 }
 
 const char* to_string(Scene s) { return s == Scene::Sphere ? "sphere" : s == Scene::Free ? "free" : "hang"; }

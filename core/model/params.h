@@ -17,6 +17,9 @@ enum class Predictor { Bounded, Explicit };
 /// or kappa_e u u^T (stiff along the spring only, so it damps stretching, not folding).
 enum class Jacobian { Isotropic, Axial };
 
+/// Fraction of Params::max_vertices where the budget's shaping starts (docs/DECISIONS.md D22).
+inline constexpr double kBudgetSoftStart = 0.9;
+
 struct Params {
   // --- scene (MODEL.md §8) ---
   Scene scene = Scene::Sphere;  ///< sphere crumple or free relax
@@ -38,7 +41,7 @@ struct Params {
                                          ///< 0: no bound but stability), the accuracy knob
   bool adapt_per_frame = false;          ///< fracture and restoration once per frame, after its
                                          ///< last step, with P over the frame (MODEL.md §4;
-                                         ///< docs/DECISIONS.md D24); else after every step
+                                         ///< docs/DECISIONS.md D27); else after every step
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit
@@ -65,13 +68,19 @@ struct Params {
                                 ///< initial mean edge length never break
   RestoreForm restore = RestoreForm::Exact;
   std::uint64_t seed = 1;       ///< seed of the counter-based random stream
-  int max_vertices = 0;         ///< vertex budget: a step's splits, in event order, stop where
-                                ///< they would take the live vertices past it (0: unlimited)
+  int max_vertices = 0;         ///< vertex budget: fracture fades and restoration eases from
+                                ///< kBudgetSoftStart of it on; a step's splits, in event order,
+                                ///< stop where they would pass it (0: unlimited; D22)
 
   /// Time step h.
   double h() const { return frame_dt / substeps; }
   /// The interval one fracture/restoration pass covers: P over it is 1 - (1 - P)^(t / h_ref).
   double adapt_interval() const { return adapt_per_frame ? frame_dt : h(); }
+
+  /// The vertex budget's shaping factor for a pass that starts with `live_vertices` (D22): 1
+  /// without a budget or up to kBudgetSoftStart of it, then linear down to 0 at the budget.
+  /// Every backend multiplies P_step of [Eq 6] and epsilon of [Eq 10] by it.
+  double budget_factor(int live_vertices) const;
 
   /// Empty if every value is usable; otherwise one line naming the first bad parameter.
   std::string validate() const;

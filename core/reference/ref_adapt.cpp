@@ -37,7 +37,7 @@ void ReferenceSimulator::update_kappa(int v) {
 }
 
 // [Eq 6] P = 1/4 c (1 - phi n_ij)(1 + phi n_rl), c = 1 - lt/l0, made per pass as
-// P_step = 1 - (1 - P)^(t / h_ref), t the pass's interval (a step, or a frame: D24). Zero for
+// P_step = 1 - (1 - P)^(t / h_ref), t the pass's interval (a step, or a frame: D27). Zero for
 // edges that cannot break.
 double ReferenceSimulator::break_probability(int e, const std::vector<V3>& n) const {
   const Edge& E = mesh_.edges[e];
@@ -50,6 +50,14 @@ double ReferenceSimulator::break_probability(int e, const std::vector<V3>& n) co
   const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
   const double P = std::clamp(0.25 * c * (1 - params_.phi * n_ij) * (1 + params_.phi * n_rl), 0.0, 1.0);
   return 1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep);
+}
+
+// [Eq 10]'s angle test quantity (1 - n_rl)/2 of auxiliary edge e's crease (wings l, r of its
+// split; n_rl = 1 for a boundary edge, D6).
+double ReferenceSimulator::restoration_angle(int e, const std::vector<V3>& n) const {
+  const int l = mesh_.edges[e].split.k[2], r = mesh_.edges[e].split.k[3];
+  const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
+  return (1.0 - n_rl) / 2.0;
 }
 
 bool ReferenceSimulator::split_edge(int e, const std::vector<V3>& n, double flat_draw) {
@@ -232,20 +240,20 @@ bool ReferenceSimulator::restore(int e) {
 std::vector<Decision> ReferenceSimulator::decide() const {
   std::vector<Decision> out(mesh_.edges.size());
   const std::vector<V3> n = vertex_normals();
+  const double budget = params_.budget_factor(mesh_.live_vertices());  // D22
   for (int e = 0; e < int(mesh_.edges.size()); ++e) {
     const Edge& E = mesh_.edges[e];
     if (!E.alive) continue;
     if (params_.fracture && !E.auxiliary) {
-      const double P = break_probability(e, n);
+      const double P = budget * break_probability(e, n);
       const double u = uniform(params_.seed, steps_, std::uint32_t(e), Draw::Fracture);
       out[e].margin = P - u;
       if (P > 0 && u < P) out[e].kind = 1;
     }
     if (params_.restoration && E.auxiliary && E.split.n >= 0) {
-      const int l = E.split.k[2], r = E.split.k[3];
-      const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
-      if ((1.0 - n_rl) / 2.0 >= params_.epsilon) out[e].kind = 2;
-      out[e].margin = (1.0 - n_rl) / 2.0 - params_.epsilon;
+      const double bent = restoration_angle(e, n);
+      if (bent >= budget * params_.epsilon) out[e].kind = 2;
+      out[e].margin = bent - budget * params_.epsilon;
     }
   }
   return out;
@@ -257,20 +265,20 @@ StepEvents ReferenceSimulator::adapt() {
   ++pass_;
   const std::vector<V3> n = vertex_normals();
   std::vector<int> splits, restores;
+  // The budget's shaping (D22): P_step and epsilon scaled by one factor of the pass's start.
+  const double budget = params_.budget_factor(mesh_.live_vertices());
   for (int e = 0; e < int(mesh_.edges.size()); ++e) {
     const Edge& E = mesh_.edges[e];
     if (!E.alive) continue;
     if (params_.fracture && !E.auxiliary) {
-      const double P = break_probability(e, n);
+      const double P = budget * break_probability(e, n);
       if (P > 0 && uniform(params_.seed, steps_, std::uint32_t(e), Draw::Fracture) < P) splits.push_back(e);
     }
     if (params_.restoration && E.auxiliary && E.split.n >= 0) {
-      const int l = E.split.k[2], r = E.split.k[3];
-      const double n_rl = (l >= 0 && r >= 0) ? n[r].dot(n[l]) : 1.0;
-      if ((1.0 - n_rl) / 2.0 >= params_.epsilon) restores.push_back(e);  // [Eq 10]
+      if (restoration_angle(e, n) >= budget * params_.epsilon) restores.push_back(e);  // [Eq 10]
     }
   }
-  if (params_.max_vertices > 0) {  // a split adds one vertex: the budget's first candidates only
+  if (params_.max_vertices > 0) {  // the hard guard: a split adds one vertex, the budget's first candidates only
     splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - mesh_.live_vertices())));
   }
   auto touched = [&](int t) {

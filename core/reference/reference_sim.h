@@ -73,6 +73,7 @@ class ReferenceSimulator final : public Simulator {
   void apply_manipulators();
   // ref_adapt.cpp
   double break_probability(int e, const std::vector<V3>& n) const;
+  double restoration_angle(int e, const std::vector<V3>& n) const;
   bool can_restore(int e) const;
   bool split_edge(int e, const std::vector<V3>& n, double flat_draw);
   void restore_edge(int e);

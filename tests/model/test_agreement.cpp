@@ -107,6 +107,24 @@ TEST(Agreement, SameDecisionsButForRoundOff) {
   EXPECT_LE(ls.borderline, ls.compared / 10000 + 3);
 }
 
+// The same in the budget's ramp (D22): both backends scale P_step and epsilon by one factor of
+// the pass's live vertices. Catches a backend that does not shape, or shapes differently: its
+// margins then differ by (1 - f) P_step or (1 - f) epsilon, up to half of epsilon here.
+TEST(Agreement, SameDecisionsNearTheBudget) {
+  Params p = churn_params();
+  p.max_vertices = 700;
+  Lockstep ls(make_grid(24), p);
+  int steps = 0, in_ramp = 0;
+  while (steps < 150 && ls.step()) {
+    ++steps;
+    in_ramp += ls.ref->totals().vertices > 0.9 * p.max_vertices;
+  }
+  std::printf("lockstep with a budget: %d steps, %d in the ramp, %d decisions, %d differ within round-off\n", steps,
+              in_ramp, ls.compared, ls.borderline);
+  EXPECT_GE(in_ramp, 20);
+  EXPECT_LE(ls.borderline, ls.compared / 10000 + 3);
+}
+
 // A 600-frame sphere crumple run independently on both: totals agree within a few per cent
 // (the trajectories differ after the first round-off decision, the statistics must not).
 TEST(Agreement, TotalsOverALongCrumple) {

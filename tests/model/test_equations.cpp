@@ -2,6 +2,8 @@
 // run on every backend.
 #include <cmath>
 
+#include "sim/scene.h"
+
 #include "support/fixtures.h"
 
 namespace crumple::test {
@@ -227,7 +229,7 @@ TEST_P(Equations, FractureProbabilityPerStepKeepsTheFrameRate) {
                                                << trials * linear << ", P per step " << trials * per_step;
 }
 
-// --adapt frame (D24): with S steps a frame the pass runs once, after the frame's last step,
+// --adapt frame (D27): with S steps a frame the pass runs once, after the frame's last step,
 // with P over the frame: 1 - (1 - P)^(frame_dt / h_ref) = P at 60 Hz. Counting as above, the
 // rate stays P (catches the step's exponent h/h_ref in a per-frame pass: 1 - (1 - P)^(1/8) =
 // 0.034 a frame) and no split happens before the frame's last step (catches a pass after every
@@ -326,25 +328,66 @@ TEST_P(Equations, ExactRestoreUndoesASplit) {
 }
 
 // Restoration, the paper's form [Eq 11-12]: m_k' = 2 m_k / (delta_k^(1/varphi) + 1) and
-// v_k' = v_k + m_n v_n / sum m_k'.
+// v_k' = v_k + m_n v_n / sum m_k', the sum over the masses *after* [Eq 11] (D24). Masses 1, 2, 3, 4
+// and every delta = 1/4, varphi = 2: the split leaves m_k = 0.75 m_k0 (sum 7.5) and m_n = 2.5;
+// [Eq 11] gives back m_k0 (sum 10), so [Eq 12] adds 2.5 v_n / 10 to every v_k. Catches [Eq 12]
+// read with the masses before [Eq 11] (2.5 v_n / 7.5: 0.25 off in x here) and a restore that
+// replaces v_k instead of adding to it.
 TEST_P(Equations, PaperRestoreFormulas) {
   Params p = still_params();
   p.varphi = 2;
   p.restore = RestoreForm::Paper;
   auto sim = make(unit_square(), p);
-  sim->set_masses({1, 1, 1, 1});
+  const std::vector<double> m0 = {1, 2, 3, 4};
+  sim->set_masses(m0);
   ASSERT_TRUE(sim->split(kDiagonal));
   auto mid = sim->snapshot();
+  ASSERT_NEAR(mid.mass[4], 2.5, tol());
   auto v = mid.velocity;
   v[4] = {3, 0, 0};
+  for (int k = 0; k < 4; ++k) v[k] = {0, 0.5 * k, -1};
   sim->set_state(mid.position, v);
   ASSERT_TRUE(sim->restore(kDiagonal));
   const auto after = sim->snapshot();
   const double mk = 0.5 * (std::sqrt(0.25) + 1);  // after the split, delta = 1/4
   for (int k = 0; k < 4; ++k) {
-    EXPECT_NEAR(after.mass[k], 2 * mk / (std::sqrt(0.25) + 1), tol());
-    EXPECT_NEAR(after.velocity[k][0], mid.mass[4] * 3 / 4.0, tol());
+    EXPECT_NEAR(after.mass[k], 2 * mk * m0[k] / (std::sqrt(0.25) + 1), tol());
+    EXPECT_NEAR(after.velocity[k][0], 2.5 * 3 / 10.0, tol()) << k;
+    EXPECT_NEAR(after.velocity[k][1], 0.5 * k, tol()) << k;
+    EXPECT_NEAR(after.velocity[k][2], -1, tol()) << k;
   }
+}
+
+// The hang scene's pins are external forces, so the momentum correction of D2 is off with them
+// (D23). With no springs (kappa = 0, no bending, no viscosity) the rows of the implicit step
+// decouple: after one step from rest every free vertex falls at exactly v_z = -h g and the
+// pinned corners stay at their start with v = 0, so the sheet's momentum changes by
+// -h g (M - pinned mass), not by -h g M. On the 2 x 2 grid the pinned corners (ids 2, 3) hold
+// half the mass. Catches the correction left on with pins: it removes the pins' support,
+// h g m_pinned / M = h g / 2, from every vertex (the free ones then fall at h g / 2).
+TEST_P(Equations, PinsSwitchOffTheMomentumCorrection) {
+  Params p = still_params();
+  p.scene = Scene::Hang;
+  p.gravity = 9.81;
+  const InputMesh sheet = make_grid(2);
+  const SceneSetup scene = make_scene(sheet, p);
+  ASSERT_EQ(scene.pinned, (std::vector<int>{2, 3}));
+  auto sim = make(sheet, p);
+  const Snapshot s0 = sim->snapshot();
+  sim->step();
+  const Snapshot s = sim->snapshot();
+  const double h = p.h();
+  double pinned_mass = 0, mass = 0, pz = 0;
+  for (int k = 0; k < 4; ++k) {
+    const bool pin = k >= 2;
+    mass += s.mass[k];
+    pinned_mass += pin ? s.mass[k] : 0.0;
+    pz += s.mass[k] * s.velocity[k][2];
+    EXPECT_NEAR(s.velocity[k][2], pin ? 0.0 : -h * 9.81, tol()) << "vertex " << k;
+    if (pin) { EXPECT_EQ(s.position[k], s0.position[k]) << "vertex " << k; }
+  }
+  ASSERT_NEAR(pinned_mass, 0.5 * mass, tol());
+  EXPECT_NEAR(pz, -h * 9.81 * (mass - pinned_mass), tol());
 }
 
 // [Eq 10] angle test in a step: after a split, a fold across the crease line with
