@@ -8,9 +8,10 @@
 //
 // Comparable work per iteration, and why manual timing:
 //   * Every iteration starts from the same prepared state: sim->clone() of the cached state,
-//     made outside the timed region, into a fresh object, and destroyed outside it. The model
-//     is deterministic (counter-based random stream keyed by edge id), so each iteration
-//     simulates the very same frames; the `mismatch` counter counts iterations whose
+//     made outside the timed region into a fresh sheet (SheetAccess::adopt, which also packs
+//     the render buffers once), and destroyed outside it. The model is deterministic
+//     (counter-based random stream keyed by edge id), so each iteration simulates the very
+//     same frames; the `mismatch` counter counts iterations whose
 //     splits/restores differ from the dry run (0 expected) and would reveal otherwise.
 //   * One untimed warm-up frame runs on the clone before the timed frames. Measured here: the
 //     first frame after a clone cost 1.4-2x a frame of the continuing simulation (reference
@@ -20,13 +21,17 @@
 //     every growing array, which a running simulation amortizes; cold caches and sleeping TBB
 //     workers add to it. From the second frame on, a clone runs at the continuing
 //     simulation's speed, which is what a frame of a crumpling sheet costs.
-//   * The timed region holds only sim->step() calls: no totals() (an O(N) pass run_frame
-//     adds), no clone, no destruction. It is measured with steady_clock and reported with
-//     SetIterationTime (UseManualTime). PauseTiming/ResumeTiming would need the same untimed
-//     clone + warm-up anyway, with more overhead inside the measurement: each pair reads the
-//     process CPU clock (a system call, ~1 us) inside the timed interval, a few per cent of
-//     the fast backend's sub-100 us frames at N = 32; manual timing costs two vDSO clock
-//     reads (~20 ns) per batch.
+//   * The timed region holds only Sheet::step calls (crumple/crumple.h, the embedding API), one
+//     per frame, which is what an engine's frame loop calls and times: the frame's steps plus
+//     what the API does around them each call (hand over the manipulators, pack the render
+//     buffers, positions and normals every frame and the triangles when the topology changed,
+//     and the totals pass of the instability check). docs/PERFORMANCE.md gives the share of
+//     those against the bare steps. No clone, no destruction inside. It is measured with
+//     steady_clock and reported with SetIterationTime (UseManualTime). PauseTiming/ResumeTiming
+//     would need the same untimed clone + warm-up anyway, with more overhead inside the
+//     measurement: each pair reads the process CPU clock (a system call, ~1 us) inside the timed
+//     interval, a few per cent of the fast backend's sub-100 us frames at N = 32; manual timing
+//     costs two vDSO clock reads (~20 ns) per batch.
 //   * A batch of frames_per_iteration(N) frames (8) is timed per iteration and divided, so each
 //     iteration's time is the mean frame time of a fixed stretch of the crumple, long enough
 //     to hold the fast backend's occasional relayout at its usual rate; the batch is fixed so
@@ -46,8 +51,10 @@
 #include <string>
 #include <tuple>
 
+#include "api/sheet_access.h"
 #include "bench_common.h"
 #include "bytes_moved.h"
+#include "crumple/crumple.h"
 #include "prepared.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
@@ -77,6 +84,7 @@ Prepared make_prepared(const std::string& backend, int threads, int n) {
   const InputMesh mesh = make_grid(n);
   const double size = make_scene(mesh, params).size;
   p.substeps = params.substeps;
+  p.size = size;
   p.sim = make_simulator(backend, mesh, params, threads);
   const int prep_frames = int(std::lround(kPrepFraction * params.sphere_time / params.frame_dt));
   for (int f = 1; f <= prep_frames; ++f) {
@@ -161,24 +169,30 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
   long mismatch = 0;
+  const Params params;  // the prepared state's: the defaults
   for (auto _ : state) {
     std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
     if (frozen) sim->set_adaptivity(false, false);
-    for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
+    Sheet sheet = SheetAccess::adopt(std::move(sim), params, p.size);
     long splits = 0, restores = 0;
-    const Clock::time_point t0 = Clock::now();
-    for (int f = 0; f < k; ++f)
-      for (int s = 0; s < p.substeps; ++s) {
-        const StepEvents ev = sim->step();
+    try {
+      sheet.step(params.frame_dt);  // untimed warm-up frame
+      const Clock::time_point t0 = Clock::now();
+      for (int f = 0; f < k; ++f) {
+        const FrameEvents ev = sheet.step(params.frame_dt);
         splits += ev.splits;
         restores += ev.restores;
       }
-    const Clock::time_point t1 = Clock::now();
-    tally.add_batch(state, seconds_between(t0, t1), k);
+      const Clock::time_point t1 = Clock::now();
+      tally.add_batch(state, seconds_between(t0, t1), k);
+    } catch (const Error& e) {  // the dry run was stable, so only a broken determinism gets here
+      state.SkipWithError(e.what());
+      break;
+    }
     tally.splits += splits;
     tally.restores += restores;
     mismatch += (splits != want_splits || restores != want_restores);
-    // sim is destroyed here, outside the timed interval
+    // sheet is destroyed here, outside the timed interval
   }
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);

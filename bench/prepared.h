@@ -15,6 +15,7 @@ namespace crumple::bench {
 struct Prepared {
   std::unique_ptr<Simulator> sim;  ///< state at the prepared point
   int substeps = 1;
+  double size = 0;                 ///< the scene's size (sim/scene.h), for the API's instability check
   double vertices = 0, edges = 0;  ///< mean live counts at the end of each dry-run frame
   long splits = 0, restores = 0;   ///< events of the whole dry-run batch
   std::string error;               ///< non-empty: the benchmark is skipped with this message
