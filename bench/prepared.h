@@ -1,6 +1,6 @@
-// The prepared crumple state shared by the benchmarks that time it (BM_Frame, BM_Frozen,
-// BM_Events): bench_frame.cpp prepares it once per (backend, threads, N) and caches it for the
-// process.
+// The prepared crumple state shared by the benchmarks that time it (BM_Frame, BM_Steps,
+// BM_Frozen, BM_Events): bench_frame.cpp prepares it once per (backend, threads, N) and caches it
+// for the process.
 #pragma once
 
 #include <benchmark/benchmark.h>
