@@ -74,7 +74,7 @@ std::string stats_row(int frame, const Sheet& sheet, const FrameEvents& ev) {
   const SheetStats& t = sheet.stats();
   std::snprintf(buf, sizeof buf, "%d,%.6f,%d,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.4f,%d",
                 frame, sheet.time(), t.vertices, t.edges, t.triangles, ev.splits, ev.restores, t.mass,
-                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, ev.ms, ev.steps);
+                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, ev.steps_ms, ev.steps);
   return buf;
 }
 

@@ -14,7 +14,7 @@ namespace crumple::app {
 /// The stats.csv header (exactly as documented in README.md).
 const char* stats_header();
 /// One stats.csv line (no newline) for frame `frame`, which took `ev` and left `sheet` as it is:
-/// step_ms is the wall time of that Sheet::step call.
+/// step_ms is the wall time of the frame's time steps (FrameEvents::steps_ms).
 std::string stats_row(int frame, const Sheet& sheet, const FrameEvents& ev);
 
 /// True for the names `crumple run` writes in --out (stats.csv, final.obj, frame_NNNNN.obj)

@@ -124,7 +124,9 @@ void Sheet::Impl::begin_block() {
 }
 
 void Sheet::Impl::take_step(FrameEvents& out) {
+  const auto t0 = std::chrono::steady_clock::now();
   StepEvents ev = sim->step();
+  out.steps_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ++out.steps;
   out.splits += ev.splits;
   out.restores += ev.restores;

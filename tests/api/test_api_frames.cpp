@@ -127,6 +127,25 @@ TEST_P(ApiFrames, UnstableFrameKeepsItsEvents) {
   }
 }
 
+// Catches a steps_ms (stats.csv's step_ms) that times more than the steps (mutation checked:
+// steps_ms set to the whole call's ms: a call that takes no step then reports a time) or that
+// is not part of the call's time. Only zero and order are asserted, never a duration.
+TEST_P(ApiFrames, StepsTimeIsPartOfTheCall) {
+  SheetDesc d;
+  d.grid = 16;
+  d.backend = GetParam();
+  d.threads = 1;
+  d.params.substeps = 2;
+  Sheet sheet = Sheet::create(d);
+  FrameEvents ev = sheet.step(1.0 / 240);  // half a step owed: no step
+  EXPECT_EQ(ev.steps, 0);
+  EXPECT_EQ(ev.steps_ms, 0.0);
+  ev = sheet.step(kFrame);
+  EXPECT_EQ(ev.steps, 2);
+  EXPECT_GT(ev.steps_ms, 0.0);
+  EXPECT_LE(ev.steps_ms, ev.ms);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, ApiFrames, ::testing::Values("reference", "fast"));
 
 }  // namespace

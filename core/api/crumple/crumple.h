@@ -77,6 +77,9 @@ struct FrameEvents {
   int restores = 0;             ///< creases restored
   bool topology_changed = false;///< splits + restores > 0: re-read triangles()
   double ms = 0;                ///< wall time of the call
+  /// The part of ms spent inside the time steps themselves: the physics and the mesh events,
+  /// without the render buffers, the totals and the callback (stats.csv's step_ms).
+  double steps_ms = 0;
 };
 
 /// Thrown by step() when the state became unstable (a value not finite, a vertex gone or too
