@@ -65,6 +65,19 @@ std::string clear_owned(const fs::path& dir, bool force) {
 
 }  // namespace
 
+const char* stats_header() {
+  return "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms,substeps";
+}
+
+std::string stats_row(int frame, const Sheet& sheet, const FrameEvents& ev) {
+  char buf[512];
+  const SheetStats& t = sheet.stats();
+  std::snprintf(buf, sizeof buf, "%d,%.6f,%d,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.4f,%d",
+                frame, sheet.time(), t.vertices, t.edges, t.triangles, ev.splits, ev.restores, t.mass,
+                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, ev.steps_ms, ev.steps);
+  return buf;
+}
+
 bool owned_name(const std::string& full) {
   const std::string name = ends_with(full, ".partial") ? full.substr(0, full.size() - 8) : full;
   if (name == "stats.csv" || name == "final.obj") return true;

@@ -1,12 +1,21 @@
-// The --out folder of `crumple run`: checked and cleared before simulating, and files that
-// appear only complete (written under a temporary name, checked, then renamed into place).
+// The --out folder of `crumple run`: checked and cleared before simulating, files that appear
+// only complete (written under a temporary name, checked, then renamed into place), and the
+// rows of stats.csv.
 #pragma once
 
 #include <cstdio>
 #include <filesystem>
 #include <string>
 
+#include "crumple/crumple.h"
+
 namespace crumple::app {
+
+/// The stats.csv header (exactly as documented in README.md).
+const char* stats_header();
+/// One stats.csv line (no newline) for frame `frame`, which took `ev` and left `sheet` as it is:
+/// step_ms is the wall time of the frame's time steps (FrameEvents::steps_ms).
+std::string stats_row(int frame, const Sheet& sheet, const FrameEvents& ev);
 
 /// True for the names `crumple run` writes in --out (stats.csv, final.obj, frame_NNNNN.obj)
 /// and their temporaries (the same with ".partial").

@@ -11,12 +11,12 @@
 #include <optional>
 #include <oneapi/tbb/global_control.h>
 
+#include "api/sheet_access.h"
+#include "crumple/crumple.h"
 #include "interrupt.h"
 #include "memory.h"
 #include "mesh/input_mesh.h"
 #include "output.h"
-#include "sim/backends.h"
-#include "sim/run.h"
 
 namespace crumple::app {
 
@@ -75,41 +75,45 @@ std::string check_memory(const RunOptions& o, std::size_t vertices) {
 struct Outcome {
   int frames_done = 0;
   int code = kOk;        // kOk, kUnstable, or 128 + the signal
-  std::string why;       // the instability
+  std::string why;       // the instability, the API's line (the command's words)
   long splits = 0, restores = 0;
   double total_ms = 0;
 };
 
-// Writes the simulator's current state to dir/name, complete or not at all.
-void write_frame(const fs::path& dir, const std::string& name, const Simulator& sim) {
+// Writes the sheet's current state to dir/name, complete or not at all.
+void write_frame(const fs::path& dir, const std::string& name, const Sheet& sheet) {
   AtomicFile file(dir / name);
-  write_snapshot_obj(file.get(), sim.snapshot());
+  sheet.write_obj(file.get());
   file.commit();
 }
 
-// The frame loop: stats rows as frames finish, a frame OBJ every `every` frames; stops at an
-// instability or an interrupt after the frame in progress.
-Outcome simulate(Simulator& sim, const RunOptions& o, double size, AtomicFile* stats) {
+// The frame loop: stats rows as frames finish (the unstable frame's too), a frame OBJ every
+// `every` frames; stops at an instability or an interrupt after the frame in progress.
+Outcome simulate(Sheet& sheet, const RunOptions& o, AtomicFile* stats) {
   Progress progress(o.frames, !o.quiet);
   Outcome r;
   for (int frame = 1; frame <= o.frames; ++frame) {
-    const FrameStats s = run_frame(sim, o.params, frame);
+    FrameEvents ev;
+    try {
+      ev = sheet.step(o.params.frame_dt);
+    } catch (const UnstableError& e) {
+      ev = e.events();
+      r.why = e.what();
+      r.code = kUnstable;
+    }
     r.frames_done = frame;
-    r.splits += s.splits;
-    r.restores += s.restores;
-    r.total_ms += s.step_ms;
+    r.splits += ev.splits;
+    r.restores += ev.restores;
+    r.total_ms += ev.steps_ms;  // the summary's ms/frame: the steps, as stats.csv's step_ms
     if (stats) {
-      std::fprintf(stats->get(), "%s\n", stats_row(s).c_str());
+      std::fprintf(stats->get(), "%s\n", stats_row(frame, sheet, ev).c_str());
       stats->flush();
     }
-    if (r.why = instability(s.totals, size); !r.why.empty()) {
-      r.code = kUnstable;
-      return r;
-    }
+    if (r.code == kUnstable) return r;
     if (o.every > 0 && frame % o.every == 0 && stats) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05d.obj", frame);
-      write_frame(o.out, name, sim);
+      write_frame(o.out, name, sheet);
     }
     if (const int signal = interrupt_signal()) {
       r.code = 128 + signal;
@@ -120,16 +124,56 @@ Outcome simulate(Simulator& sim, const RunOptions& o, double size, AtomicFile* s
   return r;
 }
 
-void report(const Outcome& r, const RunOptions& o, const Simulator& sim) {
+void report(const Outcome& r, const RunOptions& o, const Sheet& sheet) {
   if (r.code > 128) {
     std::fprintf(stderr, "crumple: interrupted by %s after frame %d of %d%s\n",
                  r.code == 128 + SIGINT ? "SIGINT" : "SIGTERM", r.frames_done, o.frames,
                  o.out.empty() ? "" : "; stats.csv and final.obj hold the frames done");
   } else if (r.code == kOk && !o.quiet) {
-    const Totals t = sim.totals();
     std::printf("crumple: %d frames, %s backend: %d vertices, %d triangles, %ld splits, %ld restores, %.3f ms/frame\n",
-                o.frames, sim.name(), t.vertices, t.triangles, r.splits, r.restores, r.total_ms / o.frames);
+                o.frames, sheet.backend(), sheet.stats().vertices, sheet.stats().triangles, r.splits, r.restores,
+                r.total_ms / o.frames);
   }
+}
+
+// The sheet of a checked run: the mesh read here (an OBJ in double precision) goes to the API,
+// which checks the rest (the vertex budget against the mesh) as it does for any engine.
+std::optional<Sheet> make_sheet(const RunOptions& o, const InputMesh& mesh, std::string& error) {
+  SheetDesc desc;
+  desc.grid = o.grid;
+  desc.alternate_diagonals = !o.fixed_diagonals;
+  desc.params = o.params;
+  desc.backend = o.backend;
+  desc.threads = o.threads;
+  try {
+    return SheetAccess::create(mesh, desc);
+  } catch (const Error& e) {
+    error = e.what();
+  }
+  return std::nullopt;
+}
+
+// Runs the frame loop with its outputs; returns the exit code.
+int simulate_and_write(Sheet& sheet, const RunOptions& o) {
+  catch_interrupts();
+  Outcome r;
+  try {
+    std::optional<AtomicFile> stats;
+    if (!o.out.empty()) {
+      stats.emplace(fs::path(o.out) / "stats.csv");
+      std::fprintf(stats->get(), "%s\n", stats_header());
+    }
+    r = simulate(sheet, o, stats ? &*stats : nullptr);
+    if (stats) stats->commit();
+    if (r.code != kUnstable && !o.out.empty()) write_frame(o.out, "final.obj", sheet);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {  // a write failed
+    return fail(kBadInput, e.what());
+  }
+  if (r.code == kUnstable) return fail(kUnstable, r.why);
+  report(r, o, sheet);
+  return r.code;
 }
 
 int run_checked(const RunOptions& o) {
@@ -144,45 +188,15 @@ int run_checked(const RunOptions& o) {
     return fail(kBadInput, e.what());
   }
   if (std::string m = check_memory(o, mesh.positions.size()); !m.empty()) return fail(kBadInput, m);
-  if (o.params.max_vertices > 0 && std::size_t(o.params.max_vertices) < mesh.positions.size()) {
-    return fail(kBadInput, "--max-vertices " + std::to_string(o.params.max_vertices) + " is below the mesh's " +
-                               std::to_string(mesh.positions.size()) + " vertices");
-  }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
-  std::unique_ptr<Simulator> sim;
-  try {
-    sim = make_simulator(o.backend, mesh, o.params, o.threads);
-  } catch (const std::bad_alloc&) {
-    throw;
-  } catch (const std::exception& e) {  // what a backend refuses
-    return fail(kBadInput, e.what());
-  }
-  const double size = make_scene(mesh, o.params).size;
+  std::string error;
+  std::optional<Sheet> sheet = make_sheet(o, mesh, error);
+  if (!sheet) return fail(kBadInput, error);
+  mesh = InputMesh();  // the sheet has its own copy
   if (!o.out.empty()) {
     if (std::string m = prepare_out(o.out, o.force); !m.empty()) return fail(kBadInput, m);
   }
-
-  catch_interrupts();
-  Outcome r;
-  try {
-    std::optional<AtomicFile> stats;
-    if (!o.out.empty()) {
-      stats.emplace(fs::path(o.out) / "stats.csv");
-      std::fprintf(stats->get(), "%s\n", stats_header());
-    }
-    r = simulate(*sim, o, size, stats ? &*stats : nullptr);
-    if (stats) stats->commit();
-    if (r.code != kUnstable && !o.out.empty()) write_frame(o.out, "final.obj", *sim);
-  } catch (const std::bad_alloc&) {
-    throw;
-  } catch (const std::exception& e) {  // a write failed
-    return fail(kBadInput, e.what());
-  }
-  if (r.code == kUnstable) {
-    return fail(kUnstable, "simulation became unstable at frame " + std::to_string(r.frames_done) + ": " + r.why);
-  }
-  report(r, o, *sim);
-  return r.code;
+  return simulate_and_write(*sheet, o);
 }
 
 }  // namespace

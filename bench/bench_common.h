@@ -35,7 +35,8 @@ inline std::string bench_label(const std::string& backend) {
 /// Sheet sizes: N x N vertex grids on the unit square.
 inline constexpr std::array<int, 6> kSizes{32, 64, 128, 256, 512, 1024};
 
-/// Sheet sizes of the benchmarks that price the physics and the events (BM_Frozen, BM_Events).
+/// Sheet sizes of the benchmarks that price the physics and the events (BM_Steps, BM_Frozen,
+/// BM_Events).
 inline constexpr std::array<int, 3> kPricedSizes{128, 256, 512};
 
 /// BM_<kind>/<backend label>/<threads>/<n>.

@@ -12,7 +12,7 @@
 // what remains is the batch's application; divided by the batch's events, that is the
 // iteration's time (manual time: seconds per event, clamped at 0 when noise makes the
 // difference negative). A relayout, which a step may trigger after its events, is not in it
-// (BM_Frame - BM_Frozen holds it). The batch's size comes from a dry run of the same step on
+// (BM_Steps - BM_Frozen holds it). The batch's size comes from a dry run of the same step on
 // another clone (Simulator::step's StepEvents): counters splits and restores per batch;
 // us_per_event is the ratio of the summed times, which noise biases less than the per-iteration
 // clamp; mismatch counts iterations whose pass left other live counts than the dry run (0

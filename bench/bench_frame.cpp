@@ -1,5 +1,6 @@
 // BM_Frame/<backend>/<threads>/<N>: one whole 1/60 s frame (params.substeps steps) of the default
-// sphere crumple (crumple::Params defaults) on make_grid(N), for every registered backend.
+// sphere crumple (crumple::Params defaults) on make_grid(N), for every registered backend, as one
+// Sheet::step call of the embedding API; BM_Steps and BM_Frozen: the same frames as bare steps.
 //
 // Preparation (outside timing, once per benchmark and cached for the process): the sheet is
 // simulated into the crumple, kPrepFraction of sphere_time, i.e. to a state where edges split
@@ -8,9 +9,10 @@
 //
 // Comparable work per iteration, and why manual timing:
 //   * Every iteration starts from the same prepared state: sim->clone() of the cached state,
-//     made outside the timed region, into a fresh object, and destroyed outside it. The model
-//     is deterministic (counter-based random stream keyed by edge id), so each iteration
-//     simulates the very same frames; the `mismatch` counter counts iterations whose
+//     made outside the timed region (BM_Frame: into a fresh sheet, SheetAccess::adopt, which
+//     also packs the render buffers once), and destroyed outside it. The model is deterministic
+//     (counter-based random stream keyed by edge id), so each iteration simulates the very
+//     same frames; the `mismatch` counter counts iterations whose
 //     splits/restores differ from the dry run (0 expected) and would reveal otherwise.
 //   * One untimed warm-up frame runs on the clone before the timed frames. Measured here: the
 //     first frame after a clone cost 1.4-2x a frame of the continuing simulation (reference
@@ -20,13 +22,18 @@
 //     every growing array, which a running simulation amortizes; cold caches and sleeping TBB
 //     workers add to it. From the second frame on, a clone runs at the continuing
 //     simulation's speed, which is what a frame of a crumpling sheet costs.
-//   * The timed region holds only sim->step() calls: no totals() (an O(N) pass run_frame
-//     adds), no clone, no destruction. It is measured with steady_clock and reported with
-//     SetIterationTime (UseManualTime). PauseTiming/ResumeTiming would need the same untimed
-//     clone + warm-up anyway, with more overhead inside the measurement: each pair reads the
-//     process CPU clock (a system call, ~1 us) inside the timed interval, a few per cent of
-//     the fast backend's sub-100 us frames at N = 32; manual timing costs two vDSO clock
-//     reads (~20 ns) per batch.
+//   * BM_Frame's timed region holds only Sheet::step calls (crumple/crumple.h, the embedding
+//     API), one per frame, which is what an engine's frame loop calls and times: the frame's
+//     steps plus what the API does around them each call (hand over the manipulators, pack the
+//     render buffers, positions and normals every frame and the triangles when the topology
+//     changed, and the totals pass of the instability check). BM_Steps and BM_Frozen (below)
+//     time bare Simulator::step calls; docs/PERFORMANCE.md gives BM_Frame against BM_Steps. No
+//     clone, no destruction inside. It is measured with steady_clock and reported with
+//     SetIterationTime (UseManualTime). PauseTiming/ResumeTiming
+//     would need the same untimed clone + warm-up anyway, with more overhead inside the
+//     measurement: each pair reads the process CPU clock (a system call, ~1 us) inside the timed
+//     interval, a few per cent of the fast backend's sub-100 us frames at N = 32; manual timing
+//     costs two vDSO clock reads (~20 ns) per batch.
 //   * A batch of frames_per_iteration(N) frames (8) is timed per iteration and divided, so each
 //     iteration's time is the mean frame time of a fixed stretch of the crumple, long enough
 //     to hold the fast backend's occasional relayout at its usual rate; the batch is fixed so
@@ -45,9 +52,12 @@
 #include <memory>
 #include <string>
 #include <tuple>
+#include <utility>
 
+#include "api/sheet_access.h"
 #include "bench_common.h"
 #include "bytes_moved.h"
+#include "crumple/crumple.h"
 #include "prepared.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
@@ -77,6 +87,7 @@ Prepared make_prepared(const std::string& backend, int threads, int n) {
   const InputMesh mesh = make_grid(n);
   const double size = make_scene(mesh, params).size;
   p.substeps = params.substeps;
+  p.size = size;
   p.sim = make_simulator(backend, mesh, params, threads);
   const int prep_frames = int(std::lround(kPrepFraction * params.sphere_time / params.frame_dt));
   for (int f = 1; f <= prep_frames; ++f) {
@@ -132,15 +143,18 @@ Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, 
 
 namespace {
 
-// BM_Frame/<backend>/<threads>/<N> (frozen = false) and BM_Frozen/<backend>/<threads>/<N>
-// (frozen = true): the latter times the same frames from the same prepared state with fracture
-// and restoration switched off (Simulator::set_adaptivity) before the warm-up frame: the
-// physics of those frames alone, with the topology frozen. BM_Frame minus BM_Frozen is what the
-// events cost (fracture and restoration tests, splits, restores, relayouts), which
-// scripts/bench_report.py divides by the events per frame. (A frozen step computes the normals
-// at its start, where an adaptive step has them from its fracture test: that pass is in both.
-// The frozen frames keep the prepared mesh, which the adaptive ones grow by ~1 % a frame, so
-// the difference also holds the physics of the elements the events add; BM_Frozen's vertices
+// BM_Frame/<backend>/<threads>/<N> times frames as an engine runs them, one Sheet::step each.
+// BM_Steps/<backend>/<threads>/<N> times the same frames as the backend's bare steps, and
+// BM_Frozen/<backend>/<threads>/<N> those bare steps with fracture and restoration switched off
+// (Simulator::set_adaptivity) before the warm-up frame: the physics of those frames alone, with
+// the topology frozen. BM_Frame minus BM_Steps is what the API's call adds to the steps (render
+// buffers, totals); BM_Steps minus BM_Frozen is what the events cost (fracture and restoration
+// tests, splits, restores, relayouts), which scripts/bench_report.py divides by the events per
+// frame. The two instruments stay on bare steps so that neither the event prices nor the frozen
+// step's bandwidth floor (issue 13) carry the API's per-call passes. (A frozen step computes the
+// normals at its start, where an adaptive step has them from its fracture test: that pass is in
+// both. The frozen frames keep the prepared mesh, which the adaptive ones grow by ~1 % a frame,
+// so the difference also holds the physics of the elements the events add; BM_Frozen's vertices
 // and edges counters are the adaptive dry run's.)
 /// A frozen frame's bytes floor (fast backend): substeps frozen steps on the prepared mesh,
 /// which the frozen frames keep (bytes_moved.h); and those bytes over the frame time.
@@ -152,33 +166,69 @@ void set_floor_counters(benchmark::State& state, const Simulator& sim, int subst
   state.counters["bytes_per_second"] = benchmark::Counter(bytes * double(state.iterations()), benchmark::Counter::kIsRate);
 }
 
-void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, bool frozen) {
+/// What one iteration timed: k frames after an untimed warm-up frame, on a fresh clone.
+struct Batch {
+  double seconds = 0;
+  long splits = 0, restores = 0;
+};
+
+/// BM_Frame: one Sheet::step per frame. Throws Error if the sheet became unstable.
+Batch api_batch(const Prepared& p, int k) {
+  const Params params;  // the prepared state's: the defaults
+  Sheet sheet = SheetAccess::adopt(p.sim->clone(), params, p.size);  // untimed: restore
+  sheet.step(params.frame_dt);                                        // untimed warm-up frame
+  Batch b;
+  const Clock::time_point t0 = Clock::now();
+  for (int f = 0; f < k; ++f) {
+    const FrameEvents ev = sheet.step(params.frame_dt);
+    b.splits += ev.splits;
+    b.restores += ev.restores;
+  }
+  b.seconds = seconds_between(t0, Clock::now());
+  return b;  // the sheet is destroyed after the clock stopped
+}
+
+/// BM_Steps and BM_Frozen: params.substeps bare Simulator::step calls per frame.
+Batch step_batch(const Prepared& p, int k, bool frozen) {
+  std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
+  if (frozen) sim->set_adaptivity(false, false);
+  for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
+  Batch b;
+  const Clock::time_point t0 = Clock::now();
+  for (int f = 0; f < k; ++f)
+    for (int s = 0; s < p.substeps; ++s) {
+      const StepEvents ev = sim->step();
+      b.splits += ev.splits;
+      b.restores += ev.restores;
+    }
+  b.seconds = seconds_between(t0, Clock::now());
+  return b;
+}
+
+enum class Timed { Api, Steps, Frozen };
+
+void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, Timed timed) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   Prepared* prep = prepared_or_skip(state, backend, threads, n);
   if (!prep) return;
   Prepared& p = *prep;
   const int k = frames_per_iteration(n);
+  const bool frozen = timed == Timed::Frozen;
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
   long mismatch = 0;
   for (auto _ : state) {
-    std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
-    if (frozen) sim->set_adaptivity(false, false);
-    for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
-    long splits = 0, restores = 0;
-    const Clock::time_point t0 = Clock::now();
-    for (int f = 0; f < k; ++f)
-      for (int s = 0; s < p.substeps; ++s) {
-        const StepEvents ev = sim->step();
-        splits += ev.splits;
-        restores += ev.restores;
-      }
-    const Clock::time_point t1 = Clock::now();
-    tally.add_batch(state, seconds_between(t0, t1), k);
-    tally.splits += splits;
-    tally.restores += restores;
-    mismatch += (splits != want_splits || restores != want_restores);
-    // sim is destroyed here, outside the timed interval
+    Batch b;
+    try {
+      b = timed == Timed::Api ? api_batch(p, k) : step_batch(p, k, frozen);
+    } catch (const Error& e) {  // the dry run was stable, so only a broken determinism gets here
+      state.SkipWithError(e.what());
+      break;
+    }
+    tally.add_batch(state, b.seconds, k);
+    tally.splits += b.splits;
+    tally.restores += b.restores;
+    mismatch += (b.splits != want_splits || b.restores != want_restores);
   }
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);
@@ -194,7 +244,7 @@ void register_frame_benchmarks() {
         if (reference && n > kReferenceMaxN) continue;
         const std::string name =
             "BM_Frame/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, false)
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, Timed::Api)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
       }
@@ -202,9 +252,10 @@ void register_frame_benchmarks() {
   }
   for_each_config([](const std::string& backend, int threads) {
     for (int n : kPricedSizes)
-      benchmark::RegisterBenchmark(bench_name("Frozen", backend, threads, n).c_str(), BM_Frame, backend, threads, n, true)
-          ->Unit(benchmark::kMillisecond)
-          ->UseManualTime();
+      for (auto [kind, timed] : {std::pair{"Steps", Timed::Steps}, std::pair{"Frozen", Timed::Frozen}})
+        benchmark::RegisterBenchmark(bench_name(kind, backend, threads, n).c_str(), BM_Frame, backend, threads, n, timed)
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
   });
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }

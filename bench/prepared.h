@@ -1,6 +1,6 @@
-// The prepared crumple state shared by the benchmarks that time it (BM_Frame, BM_Frozen,
-// BM_Events): bench_frame.cpp prepares it once per (backend, threads, N) and caches it for the
-// process.
+// The prepared crumple state shared by the benchmarks that time it (BM_Frame, BM_Steps,
+// BM_Frozen, BM_Events): bench_frame.cpp prepares it once per (backend, threads, N) and caches it
+// for the process.
 #pragma once
 
 #include <benchmark/benchmark.h>
@@ -15,6 +15,7 @@ namespace crumple::bench {
 struct Prepared {
   std::unique_ptr<Simulator> sim;  ///< state at the prepared point
   int substeps = 1;
+  double size = 0;                 ///< the scene's size (sim/scene.h), for the API's instability check
   double vertices = 0, edges = 0;  ///< mean live counts at the end of each dry-run frame
   long splits = 0, restores = 0;   ///< events of the whole dry-run batch
   std::string error;               ///< non-empty: the benchmark is skipped with this message

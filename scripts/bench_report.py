@@ -31,6 +31,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
 EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
@@ -424,7 +425,9 @@ def event_cost_section(series, frozen):
     if not rows:
         return []
     lines = ["## What the events cost", "",
-             "`BM_Frozen/<backend>/<threads>/<N>` times the frames of `BM_Frame` from the same prepared state with "
+             "`BM_Frozen/<backend>/<threads>/<N>` times the frames of `BM_Steps` (those of `BM_Frame` as the backend's "
+             "bare steps, without the API's render buffers and totals; runs from before `BM_Steps` existed compare "
+             "`BM_Frame`, which then timed bare steps) from the same prepared state with "
              "fracture and restoration switched off: the physics alone on a frozen topology. The difference is what "
              "the events cost per frame (fracture and restoration tests, splits, restores and, in the fast backend, "
              "the relayouts they trigger), and per event once divided by the splits + restores of a frame. Medians of "
@@ -490,7 +493,9 @@ def report(json_path, run, context, benches, out_dir, charts):
     prep = context.get("crumple_prep_fraction_of_sphere_time")
     prep_txt = f"{float(prep):g} x sphere_time" if prep else "the prepared point"
     lines.append(f"- `BM_Frame/<backend>/<threads>/<N>`: one 1/60 s frame of the default sphere crumple "
-                 f"(`crumple::Params` defaults) on an N x N grid, timed from a state prepared by simulating to "
+                 f"(`crumple::Params` defaults) on an N x N grid as an engine's frame loop runs it: one `Sheet::step` "
+                 "call of the embedding API, i.e. the frame's steps plus packing the render buffers and the totals "
+                 "pass of the instability check (docs/PERFORMANCE.md gives their share); timed from a state prepared by simulating to "
                  f"{prep_txt}, where edges split and restore every frame. Each iteration clones the prepared state "
                  "and runs one warm-up frame (both untimed), then times a fixed batch of frames "
                  f"({context.get('crumple_frames_per_iteration', '?')}, as N: frames) with `steady_clock` "
@@ -552,7 +557,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     else:
         lines.append("Only one crumple configuration was measured; no speed-up to show.")
     lines.append("")
-    lines += event_cost_section(series, frame_series(benches, FROZEN))
+    lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
     lines += events_section(benches)
     lines += roofline_section(benches, charts)
     if "passes.png" in charts:

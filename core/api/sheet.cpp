@@ -1,9 +1,11 @@
 // The embedding API (crumple/crumple.h) over the backend interface (sim/simulator.h): the
-// fixed-step clock, the checks, the render buffers and the topology generation.
+// fixed-step clock (with --substeps auto's choice, sim/run.h), the checks, the render buffers,
+// the totals and the topology generation.
 #include <chrono>
 #include <cmath>
 
 #include "api/api_checks.h"
+#include "api/sheet_access.h"
 #include "crumple/crumple.h"
 #include "sim/backends.h"
 #include "sim/run.h"
@@ -25,39 +27,82 @@ Params embedding_params() {
 
 struct Sheet::Impl {
   std::unique_ptr<Simulator> sim;
+  Params params;
   Manipulators manip;
   RenderBuffers buffers;
+  SheetStats stats;            ///< of the current state (computed with the instability check)
   std::function<void(const StepEventIds&)> callback;
-  double h = 0;                ///< the fixed time step
+  double h = 0;                ///< the time step (auto_substeps: fixed within a block)
   double carry = 0;            ///< simulated time owed to the next step() (< h)
   double size = 0;             ///< sheet size, for the instability test (sim/run.h)
-  int live_vertices = 0;       ///< input vertices + splits - restores (one vertex each)
+  int block_left = 0;          ///< auto_substeps: steps left before the count is chosen again
   int frames = 0;              ///< step() calls
   std::uint64_t generation = 0;
   std::string broken;          ///< why the state is unusable (empty: it is fine)
 
+  void begin_block();
   void take_step(FrameEvents& out);
+  std::string check_state();
+  void step(double frame_dt, FrameEvents& out);
 };
+
+namespace {
+SheetStats to_stats(const Totals& t) {
+  SheetStats s;
+  s.vertices = t.vertices;
+  s.edges = t.edges;
+  s.triangles = t.triangles;
+  s.mass = t.mass;
+  s.momentum = t.momentum;
+  s.kinetic = t.kinetic;
+  s.max_strain = t.max_strain;
+  return s;
+}
+}  // namespace
 
 Sheet::Sheet(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Sheet::Sheet(Sheet&&) noexcept = default;
 Sheet& Sheet::operator=(Sheet&&) noexcept = default;
 Sheet::~Sheet() = default;
 
-Sheet Sheet::create(const SheetDesc& desc) {
-  if (std::string m = api::check_desc(desc); !m.empty()) throw Error(m);
-  auto impl = std::make_unique<Impl>();
-  try {
-    const InputMesh mesh = api::input_mesh(desc);
-    impl->sim = make_simulator(desc.backend, mesh, desc.params, desc.threads);
-    impl->size = make_scene(mesh, desc.params).size;
-    impl->live_vertices = int(mesh.positions.size());
-  } catch (const std::exception& e) {  // InputError, the fast backend's missing integrator
-    throw Error(e.what());
-  }
-  impl->h = desc.params.h();
+Sheet SheetAccess::adopt(std::unique_ptr<Simulator> sim, const Params& params, double size) {
+  auto impl = std::make_unique<Sheet::Impl>();
+  impl->sim = std::move(sim);
+  impl->params = params;
+  impl->size = size;
+  impl->stats = to_stats(impl->sim->totals());
+  impl->h = params.h();
+  if (params.auto_substeps) impl->begin_block();
   impl->sim->render(impl->buffers, true);
   return Sheet(std::move(impl));
+}
+
+Sheet SheetAccess::create(const InputMesh& mesh, const SheetDesc& desc) {
+  if (std::string m = api::check_desc(desc); !m.empty()) throw Error(m);
+  const int max = desc.params.max_vertices;
+  if (max > 0 && std::size_t(max) < mesh.positions.size())  // the command's check and words
+    throw Error("--max-vertices " + std::to_string(max) + " is below the mesh's " +
+                std::to_string(mesh.positions.size()) + " vertices");
+  std::unique_ptr<Simulator> sim;
+  try {
+    sim = make_simulator(desc.backend, mesh, desc.params, desc.threads);
+  } catch (const std::bad_alloc&) {
+    throw;
+  } catch (const std::exception& e) {  // what a backend refuses (the fast one's integrators)
+    throw Error(e.what());
+  }
+  return adopt(std::move(sim), desc.params, make_scene(mesh, desc.params).size);
+}
+
+Sheet Sheet::create(const SheetDesc& desc) {
+  if (std::string m = api::check_desc(desc); !m.empty()) throw Error(m);
+  InputMesh mesh;
+  try {
+    mesh = api::input_mesh(desc);
+  } catch (const InputError& e) {
+    throw Error(e.what());
+  }
+  return SheetAccess::create(mesh, desc);
 }
 
 std::optional<Sheet> Sheet::try_create(const SheetDesc& desc, std::string& error) noexcept {
@@ -69,54 +114,82 @@ std::optional<Sheet> Sheet::try_create(const SheetDesc& desc, std::string& error
   return std::nullopt;
 }
 
+// --substeps auto (D18): the count for the next params.frame_dt of simulated time, chosen on
+// the state the command's run_frame would choose it on (the start of its frame).
+void Sheet::Impl::begin_block() {
+  const int n = choose_substeps(params, sim->stiffness_bound());
+  sim->set_substeps(n);
+  h = params.frame_dt / n;
+  block_left = n;
+}
+
 void Sheet::Impl::take_step(FrameEvents& out) {
+  const auto t0 = std::chrono::steady_clock::now();
   StepEvents ev = sim->step();
+  out.steps_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ++out.steps;
   out.splits += ev.splits;
   out.restores += ev.restores;
-  live_vertices += ev.splits - ev.restores;
   if (callback && ev.splits + ev.restores > 0)
     callback(StepEventIds{sim->steps(), ev.split_edges, ev.restored_edges});
+  if (params.auto_substeps && --block_left == 0) begin_block();
+}
+
+// Updates stats and returns why the state is unstable (empty: it is fine).
+std::string Sheet::Impl::check_state() {
+  const Totals t = sim->totals();
+  stats = to_stats(t);
+  return instability(t, size);
 }
 
 // Steps while at least one whole h is owed. The tolerance of a millionth of h absorbs the
 // rounding of frame_dt / substeps, so a frame_dt equal to params.frame_dt takes exactly
 // `substeps` steps every call.
-FrameEvents Sheet::step(double frame_dt) {
-  Impl& s = *impl_;
-  if (!s.broken.empty()) throw Error(s.broken);
+void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
+  if (!broken.empty()) throw UnstableError(broken, out);
   if (!std::isfinite(frame_dt) || frame_dt < 0 || frame_dt > 1)
     throw Error("frame_dt must be a finite number in [0, 1] seconds");
-  if (std::string m = api::check_manipulators(s.manip, vertex_ids()); !m.empty()) throw Error(m);
+  if (std::string m = api::check_manipulators(manip, int(buffers.positions.size() / 3)); !m.empty())
+    throw Error(m);
   const auto t0 = std::chrono::steady_clock::now();
-  s.sim->set_manipulators(s.manip);
-  FrameEvents out;
-  s.carry += frame_dt;
-  while (s.carry > s.h * (1 - 1e-6)) {
-    s.take_step(out);
-    s.carry = std::max(0.0, s.carry - s.h);
+  sim->set_manipulators(manip);
+  carry += frame_dt;
+  while (carry > h * (1 - 1e-6)) {
+    take_step(out);
+    carry = std::max(0.0, carry - h);
   }
-  ++s.frames;
+  ++frames;
   out.topology_changed = out.splits + out.restores > 0;
-  if (out.topology_changed) ++s.generation;
-  s.sim->render(s.buffers, out.topology_changed);
-  if (std::string why = instability(s.sim->totals(), s.size); !why.empty()) {
-    s.broken = "simulation became unstable at frame " + std::to_string(s.frames) + ": " + why;
-    throw Error(s.broken);
-  }
+  if (out.topology_changed) ++generation;
+  sim->render(buffers, out.topology_changed);
+  const std::string why = check_state();
   out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!why.empty()) {
+    broken = "simulation became unstable at frame " + std::to_string(frames) + ": " + why;
+    throw UnstableError(broken, out);
+  }
+}
+
+FrameEvents Sheet::step(double frame_dt) {
+  FrameEvents out;
+  impl_->step(frame_dt, out);
   return out;
 }
 
 std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
+  FrameEvents out;
+  std::string error;
   try {
-    const FrameEvents ev = step(frame_dt);
-    if (events) *events = ev;
+    impl_->step(frame_dt, out);
   } catch (const std::exception& e) {
-    return e.what();
+    error = e.what();
   }
-  return {};
+  if (events) *events = out;
+  return error;
 }
+
+const SheetStats& Sheet::stats() const { return impl_->stats; }
+void Sheet::write_obj(std::FILE* file) const { write_snapshot_obj(file, impl_->sim->snapshot()); }
 
 Manipulators& Sheet::manipulators() { return impl_->manip; }
 const Manipulators& Sheet::manipulators() const { return impl_->manip; }
@@ -142,7 +215,7 @@ std::span<const float> Sheet::positions() const { return impl_->buffers.position
 std::span<const float> Sheet::normals() const { return impl_->buffers.normals; }
 std::span<const std::uint32_t> Sheet::triangles() const { return impl_->buffers.triangles; }
 int Sheet::vertex_ids() const { return int(impl_->buffers.positions.size() / 3); }
-int Sheet::live_vertices() const { return impl_->live_vertices; }
+int Sheet::live_vertices() const { return impl_->stats.vertices; }
 int Sheet::live_triangles() const { return int(impl_->buffers.triangles.size() / 3); }
 std::uint64_t Sheet::topology_generation() const { return impl_->generation; }
 double Sheet::time() const { return impl_->sim->time(); }

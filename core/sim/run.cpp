@@ -3,22 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 
 namespace crumple {
-
-const char* stats_header() {
-  return "frame,time,vertices,edges,triangles,splits,restores,mass,px,py,pz,kinetic,max_strain,step_ms,substeps";
-}
-
-std::string stats_row(const FrameStats& s) {
-  char buf[512];
-  const Totals& t = s.totals;
-  std::snprintf(buf, sizeof buf, "%d,%.6f,%d,%d,%d,%d,%d,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.4f,%d",
-                s.frame, s.time, t.vertices, t.edges, t.triangles, s.splits, s.restores, t.mass,
-                t.momentum[0], t.momentum[1], t.momentum[2], t.kinetic, t.max_strain, s.step_ms, s.substeps);
-  return buf;
-}
 
 FrameStats run_frame(Simulator& sim, int substeps, int frame) {
   FrameStats s;

@@ -1,5 +1,6 @@
-// Running a simulation frame by frame: statistics per frame and the instability check, the same
-// for every backend (used by the command, the tests and the benchmarks).
+// Running a simulation frame by frame: statistics per frame, the substep choice and the
+// instability check, the same for every backend (used by the embedding API, the tests and the
+// benchmarks' preparation).
 #pragma once
 
 #include <string>
@@ -9,7 +10,7 @@
 
 namespace crumple {
 
-/// One row of stats.csv.
+/// What one frame did and left (the command writes the same values to stats.csv).
 struct FrameStats {
   int frame = 0;          ///< 1-based frame number
   double time = 0;        ///< simulated seconds at the end of the frame
@@ -19,11 +20,6 @@ struct FrameStats {
   double step_ms = 0;     ///< wall time of the frame
   int substeps = 1;       ///< steps taken in the frame
 };
-
-/// The stats.csv header (exactly as documented in README.md).
-const char* stats_header();
-/// One CSV line for s (no newline).
-std::string stats_row(const FrameStats& s);
 
 /// Advances one frame (substeps steps) and returns its statistics.
 FrameStats run_frame(Simulator& sim, int substeps, int frame);

@@ -42,13 +42,18 @@ class Api : public ::testing::TestWithParam<std::string> {};
 TEST(ApiVersion, IsTheProjectVersion) { EXPECT_STREQ(version(), CRUMPLE_EXPECTED_VERSION); }
 
 // Catches a bad parameter, mesh, backend or thread count that is not refused, or refused with
-// other words than the command's.
+// other words than the command's; and a vertex budget below the mesh's vertices that is not
+// refused (mutation checked: SheetAccess::create without that check).
 TEST(ApiErrors, OneLineWithTheCommandsText) {
   SheetDesc d = small_grid("fast");
   d.params.phi = 1.5;
   std::string error;
   EXPECT_FALSE(Sheet::try_create(d, error).has_value());
   EXPECT_EQ(error, command_error("run --phi 1.5"));
+  d = small_grid("reference");
+  d.params.max_vertices = 100;
+  EXPECT_FALSE(Sheet::try_create(d, error).has_value());
+  EXPECT_EQ(error, command_error("run --grid 16 --max-vertices 100"));
   d = small_grid("fast", 1);
   EXPECT_FALSE(Sheet::try_create(d, error).has_value());
   EXPECT_EQ(error, command_error("run --grid 1"));

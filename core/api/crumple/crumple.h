@@ -21,11 +21,14 @@
 //
 // Errors are crumple::Error exceptions (or, from the try_ functions, values) whose what() is one
 // line, the same text the `crumple` command prints after "crumple: error: ". A function that
-// fails changes nothing: there is no half-built sheet.
+// fails changes nothing: there is no half-built sheet. Running out of memory is std::bad_alloc.
+//
+// The `crumple` command and the benchmarks' frame times run through this header too.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -60,6 +63,8 @@ struct SheetDesc {
   /// no degenerate triangle, no unused vertex). Vertex k keeps id k.
   std::span<const float> positions;
   std::span<const std::uint32_t> triangles;
+  /// The model's parameters, checked as the command checks its options; params.max_vertices
+  /// (when set) must be at least the mesh's vertex count.
   Params params = embedding_params();
   std::string backend = "fast";    ///< "fast" (float, SoA, oneTBB) or "reference" (double)
   int threads = 0;                 ///< 0: the caller's oneTBB arena; n: an own arena of n
@@ -72,6 +77,34 @@ struct FrameEvents {
   int restores = 0;             ///< creases restored
   bool topology_changed = false;///< splits + restores > 0: re-read triangles()
   double ms = 0;                ///< wall time of the call
+  /// The part of ms spent inside the time steps themselves: the physics and the mesh events,
+  /// without the render buffers, the totals and the callback (stats.csv's step_ms).
+  double steps_ms = 0;
+};
+
+/// Thrown by step() when the state became unstable (a value not finite, a vertex gone or too
+/// fast, the mesh stretched to twice its rest length on average: the command's exit 3). The
+/// sheet keeps that state (stats() shows it) and refuses every further step with this error.
+class UnstableError : public Error {
+ public:
+  UnstableError(const std::string& what, const FrameEvents& events) : Error(what), events_(events) {}
+  /// What the failing call did before the check (zeros for a refused later call).
+  const FrameEvents& events() const { return events_; }
+
+ private:
+  FrameEvents events_;
+};
+
+/// Totals over the sheet's state after the last step() (or creation): what the command writes
+/// to stats.csv. step() computes them for its instability check, so reading them is free.
+struct SheetStats {
+  int vertices = 0;                  ///< live vertices
+  int edges = 0;                     ///< live mesh edges (a crease's auxiliary spring is not one)
+  int triangles = 0;                 ///< live triangles
+  double mass = 0;                   ///< sum of the vertex masses
+  std::array<double, 3> momentum{};  ///< sum of m v
+  double kinetic = 0;                ///< sum of m |v|^2 / 2
+  double max_strain = 0;             ///< max over mesh edges of |l / l0 - 1|
 };
 
 /// The events of one fixed time step, for the event callback. The spans are valid during the
@@ -84,7 +117,8 @@ struct StepEventIds {
 
 class Sheet {
  public:
-  /// Builds a sheet; throws Error (bad parameter, bad mesh, unknown backend, bad thread count).
+  /// Builds a sheet; throws Error (bad parameter, bad mesh, unknown backend, bad thread count,
+  /// params.max_vertices below the mesh's vertex count).
   static Sheet create(const SheetDesc& desc);
   /// The same, the error as a value: an empty optional and `error` set to the line.
   static std::optional<Sheet> try_create(const SheetDesc& desc, std::string& error) noexcept;
@@ -95,12 +129,24 @@ class Sheet {
 
   /// Advances simulated time by frame_dt in fixed steps h = params.frame_dt / params.substeps
   /// (the remainder is carried to the next call, so a varying frame_dt never changes h and the
-  /// run stays deterministic). Reads manipulators() first. Throws Error for a frame_dt that is
-  /// negative, not finite or over 1 s, an invalid manipulator, or a state that became unstable
-  /// (then the sheet keeps that state and further steps are refused).
+  /// run stays deterministic). With params.auto_substeps the count is chosen as the command's
+  /// `--substeps auto` chooses it: from the current mesh's stiffest mode (and params.max_step),
+  /// at creation and again after every params.frame_dt of simulated time (every call when
+  /// frame_dt equals params.frame_dt). Reads manipulators() first. Throws Error for a frame_dt
+  /// that is negative, not finite or over 1 s, or an invalid manipulator (nothing is done), and
+  /// UnstableError for a state that became unstable.
   FrameEvents step(double frame_dt);
-  /// step() with the error as a value (empty when it succeeded).
+  /// step() with the error as a value (empty when it succeeded). `events` receives what the
+  /// call did, also when it failed (UnstableError::events; zeros when refused before stepping).
   std::string try_step(double frame_dt, FrameEvents* events = nullptr) noexcept;
+
+  /// Totals over the current state (see SheetStats).
+  const SheetStats& stats() const;
+  /// Writes the current state as an OBJ, byte for byte the command's final.obj: a comment
+  /// line, the live vertices renumbered densely in id order (`v x y z`, %.9g), the live
+  /// triangles (`f a b c`, 1-based) and each crease's auxiliary spring as `l a b`. Write errors
+  /// are left in std::ferror(file) for the caller, who checks it before closing.
+  void write_obj(std::FILE* file) const;
 
   /// The caller's spheres, planes, pins and grabs (sim/manipulators.h): edit them freely
   /// between steps; each step() checks them and applies them to every one of its time steps.
@@ -132,6 +178,7 @@ class Sheet {
 
  private:
   struct Impl;
+  friend struct SheetAccess;  // the library's own tools (api/sheet_access.h); not API
   explicit Sheet(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
