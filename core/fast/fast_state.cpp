@@ -8,38 +8,76 @@
 
 namespace crumple::fast {
 
+namespace {
+/// One block's share of the totals: sums in double, maxima, and whether any state was not finite.
+struct TotalsPart {
+  double mass = 0, momentum[3] = {0, 0, 0}, kinetic = 0, max_speed = 0, max_distance = 0;
+  double max_strain = 0, strain2 = 0;
+  bool finite = true;
+};
+constexpr int kTotalsBlock = 8192;  ///< ids per block: fixed, so the sums do not depend on threads
+}  // namespace
+
+// Sums over logical ids (the layout does not change them), in fixed blocks of ids whose partial
+// sums are added in block order: the same bits on any thread count.
 Totals FastSimulator::totals() const {
   const Vertices& V = topo_.V;
+  const Edges& E = topo_.E;
+  const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
+  const int nv = V.size(), ne = E.size();
+  const int vblocks = (nv + kTotalsBlock - 1) / kTotalsBlock, eblocks = (ne + kTotalsBlock - 1) / kTotalsBlock;
+  std::vector<TotalsPart> parts(std::size_t(std::max(vblocks, eblocks)));
+  par_.run(vblocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      TotalsPart& t = parts[b];
+      for (int id = b * kTotalsBlock, last = std::min(nv, id + kTotalsBlock); id < last; ++id) {
+        const int v = V.phys[id];
+        if (!(V.m[v] > 0)) continue;
+        const double m = V.m[v], vx = V.vx[v], vy = V.vy[v], vz = V.vz[v];
+        t.mass += m;
+        t.momentum[0] += m * vx;
+        t.momentum[1] += m * vy;
+        t.momentum[2] += m * vz;
+        const double v2 = vx * vx + vy * vy + vz * vz;
+        t.kinetic += 0.5 * m * v2;
+        t.max_speed = std::max(t.max_speed, std::sqrt(v2));
+        const double dx = V.x[v] - c[0], dy = V.y[v] - c[1], dz = V.z[v] - c[2];
+        t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
+        t.finite &= bool(std::isfinite(V.x[v] + V.y[v] + V.z[v] + v2));
+      }
+    }
+  });
+  par_.run(eblocks, 1, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      TotalsPart& t = parts[b];
+      for (int id = b * kTotalsBlock, last = std::min(ne, id + kTotalsBlock); id < last; ++id) {
+        const int e = E.phys[id];
+        if ((E.flags[e] & (kAlive | kMesh)) != (kAlive | kMesh)) continue;
+        const int a = E.a[e], bb = E.b[e];
+        const double dx = double(V.x[a]) - V.x[bb], dy = double(V.y[a]) - V.y[bb], dz = double(V.z[a]) - V.z[bb];
+        const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E.l0[e] - 1.0;
+        t.max_strain = std::max(t.max_strain, std::abs(strain));
+        t.strain2 += strain * strain;
+      }
+    }
+  });
   Totals T;
   T.vertices = topo_.live_vertices();
   T.edges = topo_.live_mesh_edges();
   T.auxiliary = topo_.live_auxiliary();
   T.triangles = topo_.live_triangles();
-  const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
-  for (int id = 0; id < V.size(); ++id) {
-    const int v = V.phys[id];
-    if (!(V.m[v] > 0)) continue;
-    const double m = V.m[v], vx = V.vx[v], vy = V.vy[v], vz = V.vz[v];
-    T.mass += m;
-    T.momentum[0] += m * vx;
-    T.momentum[1] += m * vy;
-    T.momentum[2] += m * vz;
-    const double v2 = vx * vx + vy * vy + vz * vz;
-    T.kinetic += 0.5 * m * v2;
-    T.max_speed = std::max(T.max_speed, std::sqrt(v2));
-    const double dx = V.x[v] - c[0], dy = V.y[v] - c[1], dz = V.z[v] - c[2];
-    T.max_distance = std::max(T.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
-    if (!std::isfinite(V.x[v] + V.y[v] + V.z[v] + v2)) T.max_distance = NAN;
+  bool finite = true;
+  for (const TotalsPart& t : parts) {
+    T.mass += t.mass;
+    for (int d = 0; d < 3; ++d) T.momentum[d] += t.momentum[d];
+    T.kinetic += t.kinetic;
+    T.max_speed = std::max(T.max_speed, t.max_speed);
+    T.max_distance = std::max(T.max_distance, t.max_distance);
+    T.max_strain = std::max(T.max_strain, t.max_strain);
+    T.rms_strain += t.strain2;
+    finite &= t.finite;
   }
-  for (int id = 0; id < topo_.E.size(); ++id) {
-    const int e = topo_.E.phys[id];
-    if (topo_.E.flags[e] != (kAlive | kMesh | kBreakable) && topo_.E.flags[e] != (kAlive | kMesh)) continue;
-    const int a = topo_.E.a[e], b = topo_.E.b[e];
-    const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
-    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / topo_.E.l0[e] - 1.0;
-    T.max_strain = std::max(T.max_strain, std::abs(strain));
-    T.rms_strain += strain * strain;
-  }
+  if (!finite) T.max_distance = NAN;
   T.rms_strain = std::sqrt(T.rms_strain / std::max(1, T.edges));
   return T;
 }
