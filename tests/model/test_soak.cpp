@@ -77,7 +77,13 @@ TEST_P(Soak, LongRunStaysBoundedAndConserves) {
   EXPECT_GT(events, frames / 10);  // it kept crumpling, not just sat still
   // Catches a leak, or containers that grow with the number of events rather than with the mesh:
   // the fast backend's fixed-stride adjacency did (issue 14 defect 1: 19.2 -> 23.7 MB over the
-  // 100,000 frames; with per-vertex blocks, D26, 10.6 -> 10.7 MB).
+  // 100,000 frames; with per-vertex blocks, D26, 10.6 -> 10.7 MB). Under a sanitizer the resident
+  // set is the sanitizer allocator's: ASan keeps freed blocks in its quarantine until it is full
+  // (fast, CI's ASan suite: 49.1 -> 62.6 MB while the Release build stays at 10.5 MB), so the
+  // bound is asserted in builds with the real allocator, as CI's Release suite is.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+  return;
+#endif
   EXPECT_LT(rss_end, 1.05 * rss_early);
 }
 
