@@ -248,7 +248,7 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
 }
 
 // Issue 14, defect 1: adjacency memory followed the largest valence (one stride for every
-// vertex), so a fan disk with one vertex of valence 10,000 took 4.5 GB. With per-vertex blocks
+// vertex), so a fan disk with one vertex of valence 10,000 needed gigabytes. With per-vertex blocks
 // the pools hold about kMinRoom entries per vertex plus the hub's own list (about twice it,
 // doubling leaves the smaller blocks behind), before and after a relayout repacks them.
 // Catches: a per-vertex stride sized by the largest list; a repack that leaves garbage or

@@ -52,8 +52,7 @@ TEST_P(Soak, LongRunStaysBoundedAndConserves) {
   const double mass = sim->totals().mass;
   const double eps = GetParam() == "reference" ? 1e-9 : 1e-4;
   // Resident memory is compared from the later of a tenth of the run and frame 5,000 (at most half
-  // the run): the arrays grow to the budget's sheet over the first ~4,000 frames (fast: 9.6 MB at
-  // frame 1,000, 10.6 MB from frame 4,000 on), which is growth, not a creep.
+  // the run): the arrays first grow to the budget's sheet, which is growth, not a creep (README).
   const int early = std::min(frames / 2, std::max(frames / 10, 5000));
   double rss_early = 0;
   long events = 0;
@@ -75,12 +74,10 @@ TEST_P(Soak, LongRunStaysBoundedAndConserves) {
               rss_early / 1e6, early, rss_end / 1e6);
   EXPECT_EQ(sim->check_topology(), "");
   EXPECT_GT(events, frames / 10);  // it kept crumpling, not just sat still
-  // Catches a leak, or containers that grow with the number of events rather than with the mesh:
-  // the fast backend's fixed-stride adjacency did (issue 14 defect 1: 19.2 -> 23.7 MB over the
-  // 100,000 frames; with per-vertex blocks, D26, 10.6 -> 10.7 MB). Under a sanitizer the resident
-  // set is the sanitizer allocator's: ASan keeps freed blocks in its quarantine until it is full
-  // (fast, CI's ASan suite: 49.1 -> 62.6 MB while the Release build stays at 10.5 MB), so the
-  // bound is asserted in builds with the real allocator, as CI's Release suite is.
+  // Catches a leak, or containers that grow with the number of events rather than with the mesh
+  // (the fast backend's fixed-stride adjacency did: issue 14 defect 1, D26). Under a sanitizer the
+  // resident set is the sanitizer allocator's (ASan keeps freed blocks in its quarantine until it
+  // is full), so the bound is asserted in builds with the real allocator, as CI's Release suite is.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
   return;
 #endif
