@@ -8,6 +8,8 @@ Stages (each writes its part of results/accuracy/crumple/crumple.json and its ch
              viscosities c (symplectic Euler + implicit viscosity, D17), N = 64 and 128
   converge   the default viscosity's crumple with substeps doubled until every statistic's seed
              mean moves by less than its seed spread (8 seeds)
+  pareto     each method and substep count against the converged reference (8 seeds)
+  timing     each method's ms per frame on this machine, one run at a time (2 threads on fast)
   framerate  the default configuration at --frame-dt 1/30, 1/60, 1/120, 1/240 (the same 3 s)
 
 Runs go through scripts/crumple_stats.py, one crumple process per job on one thread (the fast
@@ -19,6 +21,7 @@ import argparse
 import concurrent.futures as cf
 import json
 import os
+import subprocess
 import sys
 import tempfile
 
@@ -71,10 +74,16 @@ class Runner:
             return crumple_stats.measure(args, d)
 
     def save(self):
+        """Merges this process's runs into runs.json under a lock: stages may run side by side."""
+        import fcntl
         os.makedirs(OUT, exist_ok=True)
-        with open(self.path + ".tmp", "w") as f:
-            json.dump(self.cache, f)
-        os.replace(self.path + ".tmp", self.path)
+        with open(self.path + ".lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            if os.path.exists(self.path):
+                self.cache = {**json.load(open(self.path)), **self.cache}
+            with open(self.path + ".tmp", "w") as f:
+                json.dump(self.cache, f)
+            os.replace(self.path + ".tmp", self.path)
 
 
 def summary(runs):
@@ -144,7 +153,7 @@ WOODY = ["--mesh", os.path.join(ROOT, "tests", "data", "woody.obj")]
 CONVERGE_CASES = [
     ("N32_k1e4", ["--grid", 32], 1e4, [1, 2, 4, 8, 16, 32, 64, 128], 32),
     ("N64_k1e4", ["--grid", 64], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256], 32),
-    ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64], 16),
+    ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256),
     ("N32_k1e5", ["--grid", 32], 1e5, [8, 16, 32, 64, 128, 256], 64),
     ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128], 64),
     ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128], 64),
@@ -232,6 +241,8 @@ def stage_pareto(runner, quick, only=None):
         ref_s, ref = reference_level(label)
         entry = {"reference_substeps": ref_s, "reference": ref, "methods": {}}
         for name, (opts, backend, settings) in METHODS.items():
+            if backend == "reference" and mesh[0] == "--grid" and mesh[1] > TIMING_REFERENCE_UP_TO:
+                continue  # hours per seed on the reference backend
             for S in settings:
                 lines = [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa, "--substeps", S]
                          + opts + mesh for s in seeds]
@@ -249,6 +260,62 @@ def stage_pareto(runner, quick, only=None):
                       + " ".join(f"{k}={v:.3f}" for k, v in row.get("error", {}).get("per_stat", {}).items()),
                       flush=True)
         result[label] = entry
+    return result
+
+
+# The cost axis: ms per frame of each method and substep count on the machine at hand, timed in
+# its own stage (never from runs.json, whose runs share the machine two at a time). Fast methods
+# run on 2 threads (the product's configuration); a method with only a reference implementation
+# runs there, on its one thread. Sizes -> rounds of every configuration, interleaved in a
+# shuffled order per round so a slow phase of a shared machine hits all alike.
+TIMING_SIZES = {64: 3, 128: 3, 256: 2}
+TIMING_REFERENCE_UP_TO = 64  # reference-only methods cost minutes per frame beyond this
+TIMING_SEED = 1
+
+
+def timing_configs(n):
+    for name, (opts, backend, settings) in METHODS.items():
+        if backend == "reference" and n > TIMING_REFERENCE_UP_TO:
+            continue
+        if n >= 256 and name not in ("paper", "explicit", "explicit-F"):
+            continue
+        threads = 2 if backend == "fast" else 1
+        for S in settings:
+            yield f"{name}/S{S}", ["--grid", n, "--seed", TIMING_SEED, "--backend", backend, "--threads",
+                                   threads, "--kappa", 1e4, "--substeps", S] + opts
+
+
+def stage_timing(_runner, quick, only=None):
+    """Median (over rounds) of each run's mean ms per frame; one process at a time. Fast
+    configurations get the size's rounds; reference-only ones one round, after them (they
+    cost seconds per frame, and their cost is only indicative: one thread, double)."""
+    import random
+    import accuracy_common as ac
+    rng = random.Random(12)
+    sizes = {32: 1} if quick else {n: r for n, r in TIMING_SIZES.items() if not only or f"N{n}" in only}
+    result = load_result().get("timing", {})
+    commit = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
+                            text=True).stdout.strip()
+    result.update({"machine": ac.cpu_model(), "commit": commit, "exe": crumple_stats.EXE})
+    for n, rounds in sizes.items():
+        configs = dict(timing_configs(n))
+        times = {k: [] for k in configs}
+        fast = [k for k in configs if "fast" in configs[k]]
+        schedule = [rng.sample(fast, len(fast)) for _ in range(rounds)] + [[k for k in configs if k not in fast]]
+        for r, order in enumerate(schedule):
+            for i, key in enumerate(order):
+                with tempfile.TemporaryDirectory() as d:
+                    out = crumple_stats.measure(configs[key], d)
+                if out["exit"] == 0:
+                    times[key].append(out["ms_frame_mean"])
+                print(f"  N={n} round {r + 1}/{len(schedule)} [{i + 1}/{len(order)}] {key}: "
+                      + (f"{out['ms_frame_mean']:.2f} ms/frame" if out["exit"] == 0 else f"exit {out['exit']}"),
+                      file=sys.stderr, flush=True)
+        result[f"N{n}"] = {k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
+                               "args": [str(a) for a in configs[k]]} for k, v in times.items()}
+        data = load_result()  # saved per size: a long stage keeps what it measured
+        data["timing"] = result
+        save_result(data)
     return result
 
 
@@ -278,6 +345,92 @@ def chart_convergence(data, path):
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+
+
+def pareto_points(data, label):
+    """(key, method, S, ms per frame, largest error) of each method run at a case that was also
+    timed; the timing of a case is the one of its grid size (kappa does not change the cost)."""
+    case = data.get("pareto", {}).get(label, {})
+    timing = data.get("timing", {}).get(label.split("_")[0], {})
+    out = []
+    for key, row in case.get("methods", {}).items():
+        ms = timing.get(key, {}).get("ms_frame")
+        if ms is not None and "error" in row:
+            out.append((key, row["method"], row["substeps"], ms, row["error"]["max"]))
+    return sorted(out, key=lambda p: p[3])
+
+
+def pareto_front(points):
+    """The points no other point beats on both cost and error, cheapest first."""
+    front, best = [], float("inf")
+    for p in points:
+        if p[4] < best:
+            front.append(p)
+            best = p[4]
+    return front
+
+
+def cheapest_within(points, budget=0.10):
+    ok = [p for p in points if p[4] <= budget]
+    return min(ok, key=lambda p: p[3]) if ok else None
+
+
+def chart_pareto(data, label, path):
+    """Largest error against ms per frame, every timed configuration, with the front and the
+    60 / 30 fps budgets."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    points = pareto_points(data, label)
+    if not points:
+        return False
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    methods = sorted({p[1] for p in points})
+    for m, marker in zip(methods, "osD^v<>ph*"):
+        pts = [p for p in points if p[1] == m]
+        ax.plot([p[3] for p in pts], [p[4] for p in pts], marker=marker, ls=":", label=m)
+        for p in pts:
+            ax.annotate(f"S{p[2]}", (p[3], p[4]), fontsize=6, xytext=(2, 2), textcoords="offset points")
+    front = pareto_front(points)
+    ax.plot([p[3] for p in front], [p[4] for p in front], color="k", lw=1.5, alpha=0.5, label="Pareto front")
+    for ms, text in ((1000 / 60, "60 fps"), (1000 / 30, "30 fps")):
+        ax.axvline(ms, color="r", lw=0.8, ls="--")
+        ax.text(ms, 0.012, text, color="r", fontsize=7, rotation=90, va="bottom")
+    ax.axhline(0.10, color="0.4", lw=0.8, ls="--")
+    noise = max((v["sd"] or 0) / abs(v["mean"]) for k, v in data["pareto"][label]["reference"].items()
+                if k in ERROR_STATS)
+    ax.axhspan(0, noise, color="0.9", zorder=0, label=f"reference's largest seed spread ({noise:.0%})")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_ylim(0.01, max(p[4] for p in points) * 1.5)
+    ax.set_xlabel("ms per frame (mean of a 3 s crumple; fast backend 2 threads, reference backend 1)")
+    ax.set_ylabel("largest relative error of a seed mean")
+    t = data.get("timing", {})
+    ax.set_title(f"crumple {label}: error against the converged crumple, and cost\n{t.get('machine', '?')}, "
+                 f"crumple {t.get('commit', '?')}", fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return True
+
+
+def table_cheapest(data):
+    lines = ["| case | cheapest within 10 % | ms/frame | its largest error | fits 60 fps | paper (approx, S = 1): "
+             "ms/frame, error |", "|---|---|---:|---:|---|---|"]
+    for label in data.get("pareto", {}):
+        points = pareto_points(data, label)
+        if not points:
+            continue
+        best = cheapest_within(points)
+        paper = next((p for p in points if p[1] == "paper"), None)
+        paper_txt = f"{paper[3]:.2f}, {paper[4]:.0%}" if paper else "-"
+        if best:
+            lines.append(f"| {label} | {best[0]} | {best[3]:.2f} | {best[4]:.1%} | "
+                         f"{'yes' if best[3] <= 1000 / 60 else 'no'} | {paper_txt} |")
+        else:
+            lines.append(f"| {label} | none of the timed configurations | | | | {paper_txt} |")
+    return "\n".join(lines)
 
 
 def table_calibration(data):
@@ -317,40 +470,43 @@ def stage_report(_runner, _quick):
     data = load_result()
     if "converge" in data:
         chart_convergence(data, os.path.join(OUT, "crumple_convergence.png"))
+    for label in data.get("pareto", {}):
+        chart_pareto(data, label, os.path.join(OUT, f"crumple_pareto_{label.split('_')[0]}"
+                                              + ("" if label.endswith("k1e4") else "_" + label.split("_")[1]) + ".png"))
     with open(os.path.join(OUT, "tables.md"), "w") as f:
         f.write("# Tables of the crumple study (generated by scripts/crumple_study.py report)\n")
         f.write("\n## Calibration of the viscosity\n" + table_calibration(data) + "\n")
         f.write("\n## Error against the converged crumple\n" + table_pareto(data) + "\n")
+        f.write("\n## The cheapest configuration within 10 % of converged\n" + table_cheapest(data) + "\n")
     return data.get("report")
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "report"])
+    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "timing", "report"])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--fresh", action="store_true")
     p.add_argument("--cached-only", action="store_true", help="use only cached runs (converge: stop at the "
                    "last level run in full)")
-    p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels)")
+    p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64 ...")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
     a = p.parse_args(argv)
     if not os.path.exists(crumple_stats.EXE):
         sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
     runner = Runner(a.jobs, a.fresh, a.cached_only)
-    data = load_result()
-    if a.stage == "converge":
-        data[a.stage] = stage_converge(runner, a.quick, a.cases)
-    elif a.stage == "pareto":
-        data[a.stage] = stage_pareto(runner, a.quick, a.cases)
-    elif a.stage == "report":
+    if a.stage == "report":
         stage_report(runner, a.quick)
         return
-    else:
-        data[a.stage] = stage_calibrate(runner, a.quick, a.sizes, a.substeps)
+    stages = {"converge": lambda: stage_converge(runner, a.quick, a.cases),
+              "pareto": lambda: stage_pareto(runner, a.quick, a.cases),
+              "timing": lambda: stage_timing(runner, a.quick, a.cases),
+              "calibrate": lambda: stage_calibrate(runner, a.quick, a.sizes, a.substeps)}
+    result = stages[a.stage]()
+    data = load_result()  # read again: another stage may have saved its part meanwhile
+    data[a.stage] = result
     save_result(data)
-
 
 if __name__ == "__main__":
     main()

@@ -11,6 +11,13 @@ study's 16 x 16 grid; fast backend 2 threads, Baraff-Witkin on the reference bac
 crumple options to get it, then the next-best alternatives. A kappa that was not studied for the
 scene takes the nearest studied one (in log kappa) and says so. Exit status 0 with a
 recommendation, 1 when no tested method meets the budget, 2 for bad arguments.
+
+    /usr/bin/python3 scripts/recommend.py --scene crumple --grid 128 --kappa 1e4 --error 0.1
+
+The crumple scene (the sphere crumple of 3 s) answers from results/accuracy/crumple/crumple.json
+(scripts/crumple_study.py): the cheapest timed configuration whose statistics' seed means are all
+within the budget (relative error) of the converged crumple at that grid size and kappa, its
+ms per frame, and the options to get it.
 """
 import argparse
 import json
@@ -21,20 +28,70 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 from accuracy_common import frames_for  # noqa: E402
+import crumple_study  # noqa: E402
+
+
+def crumple_main(a):
+    """The crumple scene: a case of the crumple study, by grid size and kappa."""
+    data = crumple_study.load_result() if a.table is None else json.load(open(a.table))
+    label = f"N{a.grid}_k1e{round(math.log10(a.kappa))}"
+    if label not in data.get("pareto", {}):
+        studied = ", ".join(sorted(data.get("pareto", {}))) or "none"
+        print(f"recommend: the crumple study has no case {label} (grid {a.grid}, kappa {a.kappa:g}); "
+              f"studied: {studied}", file=sys.stderr)
+        return 2
+    points = crumple_study.pareto_points(data, label)
+    if not points:
+        print(f"recommend: case {label} has no timed configuration (run the study's timing stage)", file=sys.stderr)
+        return 2
+    ok = sorted((p for p in points if p[4] <= a.error), key=lambda p: p[3])
+    args = {k: row for k, row in data["timing"][label.split("_")[0]].items()}
+
+    def describe(p):
+        full = args[p[0]]["args"]  # the timed command line, less its seed
+        opts = [o for i, o in enumerate(full) if o != "--seed" and not (i > 0 and full[i - 1] == "--seed")]
+        return {"configuration": p[0], "ms_per_frame": p[3], "error": p[4], "fits_60fps": p[3] <= 1000 / 60,
+                "crumple_options": " ".join(opts)}
+
+    out = {"scene": "crumple", "case": label, "error_budget": a.error,
+           "recommendation": describe(ok[0]) if ok else None,
+           "alternatives": [describe(p) for p in ok[1:1 + a.alternatives]],
+           "machine": data["timing"].get("machine"), "commit": data["timing"].get("commit")}
+    if a.json:
+        print(json.dumps(out, indent=1))
+        return 0 if ok else 1
+    print(f"crumple {label}, error budget {a.error:g} (largest relative error of a statistic's seed mean)")
+    if not ok:
+        best = min(points, key=lambda p: p[4])
+        print(f"  none of the timed configurations meets it; the most accurate: {best[0]}, error {best[4]:.1%}, "
+              f"{best[3]:.1f} ms/frame")
+        return 1
+    r = out["recommendation"]
+    print(f"  cheapest: {r['configuration']}, error {r['error']:.1%}, {r['ms_per_frame']:.1f} ms per frame "
+          f"({'fits' if r['fits_60fps'] else 'does not fit'} 60 fps)")
+    print(f"    crumple run {r['crumple_options']}")
+    for alt in out["alternatives"]:
+        print(f"  then: {alt['configuration']}: error {alt['error']:.1%}, {alt['ms_per_frame']:.1f} ms/frame")
+    print(f"  (timed on {out['machine']}, crumple {out['commit']})")
+    return 0
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scene", required=True, help="hang or free (the scenes of the study)")
+    ap.add_argument("--scene", required=True, help="hang or free (the scenes of the trajectory study), or crumple")
+    ap.add_argument("--grid", type=int, default=128, help="crumple: grid size N of the case")
     ap.add_argument("--kappa", type=float, required=True, help="stiffness per unit mass")
     ap.add_argument("--error", type=float, required=True, help="error budget (fraction of the sheet diagonal)")
-    ap.add_argument("--table", default=os.path.join(ROOT, "results", "accuracy", "sweep.json"),
-                    help="the saved study (default: the full run's results/accuracy/sweep.json)")
+    ap.add_argument("--table", default=None, help="the saved study (default: results/accuracy/sweep.json, "
+                    "for crumple results/accuracy/crumple/crumple.json)")
     ap.add_argument("--alternatives", type=int, default=3)
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     a = ap.parse_args(argv)
     if not (a.kappa > 0 and a.error > 0):
         ap.error("--kappa and --error must be positive")
+    if a.scene == "crumple":
+        return crumple_main(a)
+    a.table = a.table or os.path.join(ROOT, "results", "accuracy", "sweep.json")
     try:
         with open(a.table) as f:
             data = json.load(f)

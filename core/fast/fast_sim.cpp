@@ -153,10 +153,12 @@ StepEvents FastSimulator::step() {
   time_ += params_.h();
   apply_manipulators();
   StepEvents ev;
-  if (adapt_clock_.tick(params_)) ev = adapt();
-  if (!manip_.empty()) {  // a split's new vertex may land inside an obstacle
-    apply_manipulators();
-    normals_valid_ = false;
+  if (adapt_clock_.tick(params_)) {
+    ev = adapt();
+    if (!manip_.empty()) {  // a split's new vertex may land inside an obstacle
+      apply_manipulators();
+      normals_valid_ = false;
+    }
   }
   if (layout_stale(topo_, layout_fraction_)) {
     PassTimer t(pass_seconds_, int(Pass::Layout));

@@ -307,7 +307,7 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   inverse(par, V.lid, V.phys);
   inverse(par, E.lid, E.phys);
   inverse(par, T.lid, T.phys);
-  V.created = E.created = T.created = 0;
+  V.created = 0;
 }
 
 }  // namespace crumple::fast

@@ -44,7 +44,7 @@ struct LayoutScratch {
   Array<Float4> spare_f4;
 };
 
-/// Reorders the slots of m as described above and resets the `created` counters.
+/// Reorders the slots of m as described above and resets the vertices' `created` counter.
 void relayout(Topology& m, const Parallel& par, LayoutScratch& scratch);
 
 /// True when the vertices created since the last relayout are at least `fraction` of the slots

@@ -53,7 +53,6 @@ constexpr std::size_t kTakeAhead = 8;
 template <class Kind>
 int take_slot(Kind& k) {
   const std::size_t size = k.lid.size();
-  ++k.created;
   if (!k.free_ids.empty()) {
     const int id = k.free_ids.back();
     k.free_ids.pop_back();
@@ -75,8 +74,10 @@ int Topology::new_vertex() {
 // A vertex slot keeps its blocks when it is released and reused: only new slots get blocks (fit).
 void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
 
-int Topology::take_vertex() { return take_slot(V); }
-
+int Topology::take_vertex() {
+  ++V.created;
+  return take_slot(V);
+}
 int Topology::take_edge() { return take_slot(E); }
 
 int Topology::take_triangle() { return take_slot(T); }

@@ -112,7 +112,7 @@ struct Vertices {
   std::int64_t garbage_e = 0;     ///< springs pool entries in blocks a list moved out of
   std::int64_t garbage_t = 0;     ///< the same for the tris pool
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
-  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
+  std::int64_t created = 0;       ///< vertices taken since the last relayout (layout_stale)
 
   int size() const { return int(m.size()); }
 };
@@ -130,7 +130,6 @@ struct Edges {
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
   Array<std::int32_t> phys;      ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
-  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
   int size() const { return int(a.size()); }
 };
@@ -143,7 +142,6 @@ struct Triangles {
   Array<std::int32_t> lid;         ///< logical id of each slot
   Array<std::int32_t> phys;        ///< slot of each logical id
   std::vector<int> free_ids;       ///< LIFO free list of logical ids
-  std::int64_t created = 0;        ///< elements created since the last relayout (layout.h)
 
   int size() const { return int(v0.size()); }
   std::array<int, 3> corners(int t) const { return {v0[t], v1[t], v2[t]}; }
