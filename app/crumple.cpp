@@ -1,5 +1,6 @@
 // The `crumple` command: parses options (CLI11) and dispatches to the run command.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <charconv>
 #include <cstdint>
 #include <cerrno>
@@ -39,6 +40,10 @@ int main(int argc, char** argv) {
   cli.require_subcommand(1);
   cli.set_version_flag("--version", std::string("crumple ") + version());
   app::RunOptions o;
+  // --paper chooses the base that the other options change. It is found before parsing so that
+  // an option given with it wins in any order.
+  const bool paper = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--paper") == 0; });
+  o.params = paper ? paper_params() : default_params();
   Params& p = o.params;
   CLI::App* run = cli.add_subcommand("run", "Simulate a sheet; optionally write stats.csv and OBJ frames");
 
@@ -61,7 +66,8 @@ int main(int argc, char** argv) {
              throw CLI::ValidationError("--substeps", "must be a whole number or auto, got '" + s + "'");
            p.substeps = n;
          },
-         "steps per frame, or auto: chosen each frame from the mesh's stiffest mode (default 1)");
+         "steps per frame, or auto: chosen each frame from the mesh's stiffest mode and --max-step "
+         "(default auto; --paper: 1)");
   run->add_option("--max-step", p.max_step, "--substeps auto: largest step in seconds (0: stability only)")
       ->capture_default_str();
   run->add_option_function<std::string>(
@@ -70,7 +76,7 @@ int main(int argc, char** argv) {
            if (s != "step" && s != "frame") throw CLI::ValidationError("--adapt", "must be step or frame, got '" + s + "'");
            p.adapt_per_frame = s == "frame";
          },
-         "fracture and restoration after every step (the paper's) or once per frame (default step)");
+         "fracture and restoration after every step (the paper's) or once per frame (default frame; --paper: step)");
   run->add_option("--integrator", p.integrator, "approx | explicit | implicit | xpbd")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},
@@ -113,6 +119,9 @@ int main(int argc, char** argv) {
   run->add_flag("--force", o.force, "--out may be a non-empty folder: replace crumple's files in it");
   run->add_option("--every", o.every, "also write every K-th frame as frame_NNNNN.obj")->capture_default_str();
   run->add_flag("--quiet", o.quiet, "no progress bar and no summary");
+  bool paper_given = false;  // read before parsing (above); declared so that --help lists it
+  run->add_flag("--paper", paper_given, "start from the paper's configuration (approx, one step per frame, no viscosity, "
+                "fracture after every step) instead of the default (docs/DECISIONS.md D28)");
 
   for (CLI::Option* option : run->get_options()) {
     if (option->get_type_size() > 0) option->check(kNotEmpty);

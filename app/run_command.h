@@ -13,13 +13,13 @@ struct RunOptions {
   bool fixed_diagonals = false;   ///< grid diagonals all one way instead of alternating
   std::string mesh;               ///< OBJ file (overrides grid)
   int frames = 180;               ///< frames of params.frame_dt
-  std::string backend = "reference";
+  std::string backend = "fast";
   int threads = 1;                ///< worker threads for parallel backends
   std::string out;                ///< output folder (empty: none)
   bool force = false;             ///< --out may be a non-empty folder: replace crumple's files in it
   int every = 0;                  ///< also write every K-th frame as an OBJ (0: never)
   bool quiet = false;             ///< no progress bar, no summary
-  Params params;
+  Params params = default_params();
 };
 
 /// Exit codes of the command; an interrupted run exits 128 + the signal (130 SIGINT, 143 SIGTERM).

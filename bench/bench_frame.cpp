@@ -1,6 +1,7 @@
-// BM_Frame/<backend>/<threads>/<N>: one whole 1/60 s frame (params.substeps steps) of the default
-// sphere crumple (crumple::Params defaults) on make_grid(N), for every registered backend, as one
-// Sheet::step call of the embedding API; BM_Steps and BM_Frozen: the same frames as bare steps.
+// BM_Frame/<backend>/<threads>/<N>: one whole 1/60 s frame (params.substeps steps) of the paper's
+// sphere crumple (crumple::Params{}, paper_params()) on make_grid(N), for every registered backend,
+// as one Sheet::step call of the embedding API; BM_Steps and BM_Frozen: the same frames as bare
+// steps; BM_Default: one frame of the command's default configuration (default_params(), D28).
 //
 // Preparation (outside timing, once per benchmark and cached for the process): the sheet is
 // simulated into the crumple, kPrepFraction of sphere_time, i.e. to a state where edges split
@@ -81,17 +82,23 @@ constexpr double kPrepFraction = 0.6;
 /// preparation alone takes ~1.5 min, so N = 1024 is left to the fast backend.
 constexpr int kReferenceMaxN = 512;
 
-Prepared make_prepared(const std::string& backend, int threads, int n) {
+/// Largest N of BM_Default: its frames take tens of steps (docs/DECISIONS.md D28), so a frame at
+/// N = 256 costs about what the paper's costs at N = 1024, and its preparation minutes.
+constexpr int kDefaultMaxN = 256;
+constexpr int kDefaultReferenceMaxN = 64;
+
+Prepared make_prepared(const std::string& backend, int threads, int n, Config config) {
   Prepared p;
-  const Params params;  // the defaults: sphere scene
+  const Params params = config == Config::Paper ? paper_params() : default_params();  // sphere scene
   const InputMesh mesh = make_grid(n);
   const double size = make_scene(mesh, params).size;
+  p.params = params;
   p.substeps = params.substeps;
   p.size = size;
   p.sim = make_simulator(backend, mesh, params, threads);
   const int prep_frames = int(std::lround(kPrepFraction * params.sphere_time / params.frame_dt));
   for (int f = 1; f <= prep_frames; ++f) {
-    const FrameStats s = run_frame(*p.sim, params.substeps, f);
+    const FrameStats s = run_frame(*p.sim, params, f);  // the default: substeps chosen per frame
     if (std::string why = instability(s.totals, size); !why.empty()) {
       p.error = "unstable while preparing, frame " + std::to_string(f) + ": " + why;
       return p;
@@ -100,7 +107,7 @@ Prepared make_prepared(const std::string& backend, int threads, int n) {
   const int k = frames_per_iteration(n);
   std::unique_ptr<Simulator> dry = p.sim->clone();
   for (int f = 0; f <= k; ++f) {  // f = 0: the untimed warm-up frame
-    const FrameStats s = run_frame(*dry, params.substeps, prep_frames + 1 + f);
+    const FrameStats s = run_frame(*dry, params, prep_frames + 1 + f);
     if (std::string why = instability(s.totals, size); !why.empty()) {
       p.error = "unstable in the timed frames, frame " + std::to_string(prep_frames + 1 + f) + ": " + why;
       return p;
@@ -118,24 +125,25 @@ Prepared make_prepared(const std::string& backend, int threads, int n) {
 
 }  // namespace
 
-Prepared& prepared(const std::string& backend, int threads, int n) {
-  static std::map<std::tuple<std::string, int, int>, Prepared> cache;
-  const auto key = std::make_tuple(backend, threads, n);
+Prepared& prepared(const std::string& backend, int threads, int n, Config config) {
+  static std::map<std::tuple<std::string, int, int, Config>, Prepared> cache;
+  const auto key = std::make_tuple(backend, threads, n, config);
   auto it = cache.find(key);
   if (it == cache.end()) {
     // Progress on stderr: with random interleaving Google Benchmark prints a benchmark's rows
     // only after its last repetition, and preparing the large sheets takes minutes.
     const Clock::time_point t0 = Clock::now();
-    it = cache.emplace(key, make_prepared(backend, threads, n)).first;
-    std::fprintf(stderr, "crumple_bench: prepared %s, %d thread(s), N = %d in %.1f s%s%s\n", backend.c_str(),
-                 threads, n, seconds_between(t0, Clock::now()), it->second.error.empty() ? "" : ": ",
+    it = cache.emplace(key, make_prepared(backend, threads, n, config)).first;
+    std::fprintf(stderr, "crumple_bench: prepared %s%s, %d thread(s), N = %d in %.1f s%s%s\n", backend.c_str(),
+                 config == Config::Default ? " (default configuration)" : "", threads, n,
+                 seconds_between(t0, Clock::now()), it->second.error.empty() ? "" : ": ",
                  it->second.error.c_str());
   }
   return it->second;
 }
 
-Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, int threads, int n) {
-  Prepared& p = prepared(backend, threads, n);
+Prepared* prepared_or_skip(benchmark::State& state, const std::string& backend, int threads, int n, Config config) {
+  Prepared& p = prepared(backend, threads, n, config);
   if (p.error.empty()) return &p;
   state.SkipWithError(p.error.c_str());
   return nullptr;
@@ -174,7 +182,7 @@ struct Batch {
 
 /// BM_Frame: one Sheet::step per frame. Throws Error if the sheet became unstable.
 Batch api_batch(const Prepared& p, int k) {
-  const Params params;  // the prepared state's: the defaults
+  const Params& params = p.params;
   Sheet sheet = SheetAccess::adopt(p.sim->clone(), params, p.size);  // untimed: restore
   sheet.step(params.frame_dt);                                        // untimed warm-up frame
   Batch b;
@@ -207,9 +215,10 @@ Batch step_batch(const Prepared& p, int k, bool frozen) {
 
 enum class Timed { Api, Steps, Frozen };
 
-void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, Timed timed) {
+void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, Timed timed,
+              Config config) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Prepared* prep = prepared_or_skip(state, backend, threads, n);
+  Prepared* prep = prepared_or_skip(state, backend, threads, n, config);
   if (!prep) return;
   Prepared& p = *prep;
   const int k = frames_per_iteration(n);
@@ -244,7 +253,7 @@ void register_frame_benchmarks() {
         if (reference && n > kReferenceMaxN) continue;
         const std::string name =
             "BM_Frame/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, Timed::Api)
+        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, Timed::Api, Config::Paper)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
       }
@@ -253,10 +262,24 @@ void register_frame_benchmarks() {
   for_each_config([](const std::string& backend, int threads) {
     for (int n : kPricedSizes)
       for (auto [kind, timed] : {std::pair{"Steps", Timed::Steps}, std::pair{"Frozen", Timed::Frozen}})
-        benchmark::RegisterBenchmark(bench_name(kind, backend, threads, n).c_str(), BM_Frame, backend, threads, n, timed)
+        benchmark::RegisterBenchmark(bench_name(kind, backend, threads, n).c_str(), BM_Frame, backend, threads, n, timed, Config::Paper)
             ->Unit(benchmark::kMillisecond)
             ->UseManualTime();
   });
+  // BM_Default/<backend>/<threads>/<N>: the command's default configuration (D28), the same
+  // prepared-state method, one Sheet::step per frame.
+  for (const std::string& backend : backend_names())
+    for (int threads : {1, 2}) {
+      const bool reference = backend == "reference";
+      if (reference && threads != 1) continue;
+      for (int n : kSizes) {
+        if (n > (reference ? kDefaultReferenceMaxN : kDefaultMaxN)) continue;
+        benchmark::RegisterBenchmark(bench_name("Default", backend, threads, n).c_str(), BM_Frame, backend, threads,
+                                     n, Timed::Api, Config::Default)
+            ->Unit(benchmark::kMillisecond)
+            ->UseManualTime();
+      }
+    }
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }
 

@@ -121,9 +121,18 @@ def frames_for(steps_per_second, seconds=1.0):
     return {"frame_dt": best / n, "frames": total // best, "substeps": best}
 
 
+def pinned_base(args):
+    """`crumple run` options that keep a study's command lines meaning what they meant when it
+    was run: the paper's configuration as the base its options change (--paper), and the
+    reference backend where none is named (the command's defaults before D28)."""
+    args = [str(a) for a in args]
+    return ["--paper"] + ([] if "--backend" in args else ["--backend", "reference"]) + args
+
+
 def crumple(args, out=None, timeout=3600):
-    """Runs `crumple run ARGS [--out OUT] --quiet`; returns (exit code, wall seconds, stderr)."""
-    cmd = [EXE, "run"] + [str(a) for a in args] + ["--quiet"]
+    """Runs `crumple run --paper ARGS [--out OUT] --quiet` (pinned_base); returns (exit code,
+    wall seconds, stderr)."""
+    cmd = [EXE, "run"] + pinned_base(args) + ["--quiet"]
     if out:
         cmd += ["--out", out]
     t0 = time.perf_counter()

@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""Statistics of one crumple (issue 12): runs `crumple run` once and measures what a crumple is.
+"""Statistics of one crumple (issue 12): runs `crumple run --paper ARGS` once and measures what a
+crumple is. (--paper: every command line of the study names its configuration as changes to the
+paper's, so that its meaning does not follow the command's default; docs/DECISIONS.md D28.)
 
     /usr/bin/python3 scripts/crumple_stats.py -- --grid 64 --seed 3 [crumple run options]
         -> prints one JSON object
@@ -80,7 +82,8 @@ def area(V, F):
 def measure(args, work, ke_every=6, timeout=7200):
     """Runs `crumple run ARGS --out WORK --quiet` and returns its statistics (see the module doc)."""
     args = [str(a) for a in args]
-    p = subprocess.run([EXE, "run"] + args + ["--out", work, "--quiet"], capture_output=True, text=True,
+    # The paper's configuration is the base every command line of the study changes (D28).
+    p = subprocess.run([EXE, "run", "--paper"] + args + ["--out", work, "--quiet"], capture_output=True, text=True,
                        timeout=timeout)
     out = {"args": args, "exit": p.returncode}
     if p.returncode != 0:

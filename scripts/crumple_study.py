@@ -408,7 +408,7 @@ def chart_pareto(data, label, path):
     t = data.get("timing", {})
     ax.set_title(f"crumple {label}: error against the converged crumple, and cost\n{t.get('machine', '?')}, "
                  f"crumple {t.get('commit', '?')}", fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -466,8 +466,31 @@ def table_pareto(data):
     return "\n".join(lines)
 
 
+BAND_CASE = "N32_k1e4"
+BAND_FILE = os.path.join(ROOT, "tests", "data", "converged_crumple_N32.json")
+
+
+def export_band(data, path=BAND_FILE):
+    """The converged crumple at N = 32 (its finest level) as the test data of DefaultBand
+    (tests/model/test_default_band.cpp)."""
+    case = data.get("converge", {}).get("cases", {}).get(BAND_CASE)
+    if not case:
+        return
+    finest = max(case["levels"], key=int)
+    level = case["levels"][finest]
+    out = {"source": f"scripts/crumple_study.py report: results/accuracy/crumple/crumple.json, converge "
+                     f"{BAND_CASE}, symplectic Euler + c = {data['converge'].get('viscosity', DEFAULT_C):.6g} "
+                     f"at {finest} substeps per frame, fracture after every step",
+           "seeds": level["seeds"] - level["failed"]}
+    out.update({s: level[s] for s in ("splits", "restores", "vertices", "radius_norm")})
+    with open(path, "w") as f:
+        json.dump(out, f, indent=1)
+        f.write("\n")
+
+
 def stage_report(_runner, _quick):
     data = load_result()
+    export_band(data)
     if "converge" in data:
         chart_convergence(data, os.path.join(OUT, "crumple_convergence.png"))
     for label in data.get("pareto", {}):

@@ -53,6 +53,7 @@ from matplotlib.gridspec import GridSpec, GridSpecFromSubplotSpec  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
+import accuracy_common as ac  # noqa: E402
 from render import load_obj, render_mesh, face_normals  # noqa: E402
 from crease import crease_stats  # noqa: E402
 
@@ -76,7 +77,8 @@ def frame_files(d):
 def run_sim(binary, outdir, args, every, ref_area, force=False):
     """Run crumple once (cached by command line) and measure it. Returns a dict."""
     os.makedirs(outdir, exist_ok=True)
-    cmd = [binary, "run", "--quiet", "--out", outdir, "--every", str(every)] + list(args)
+    # The paper's configuration on the reference backend, as the figures were made (D28).
+    cmd = [binary, "run", "--quiet", "--out", outdir, "--every", str(every)] + ac.pinned_base(args)
     meta = os.path.join(outdir, "run.json")
     if not force and os.path.exists(meta):
         with open(meta) as fh:

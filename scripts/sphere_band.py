@@ -4,8 +4,9 @@
     /usr/bin/python3 scripts/sphere_band.py [build-dir] [seeds]
         -> results/sphere_band/stats.csv (one row a run) and results/sphere_band/band.json
 
-Runs `crumple run --grid 16 --frames 150 --seed S --backend B` with every other option at its
-default (the run the test makes: make_grid(16), Params{}, 150 steps of one frame each) for seeds
+Runs `crumple run --paper --grid 16 --frames 150 --seed S --backend B` with every other option
+at the paper's configuration (the run the test makes: make_grid(16), Params{}, 150 steps of one
+frame each) for seeds
 1..seeds (default 16) on both backends, and records each run's splits and restores (summed over
 stats.csv) and its live vertices at the end. band.json holds, per quantity over all runs of both
 backends (they agree in distribution, tests/model/test_agreement.cpp), the mean, the sample
@@ -26,7 +27,7 @@ QUANTITIES = ("splits", "restores", "vertices")
 
 def run(exe, backend, seed, work):
     out = os.path.join(work, f"{backend}_{seed}")
-    cmd = [exe, "run", "--grid", "16", "--frames", "150", "--seed", str(seed), "--backend", backend,
+    cmd = [exe, "run", "--paper", "--grid", "16", "--frames", "150", "--seed", str(seed), "--backend", backend,
            "--out", out, "--quiet"]
     subprocess.run(cmd, check=True)
     with open(os.path.join(out, "stats.csv")) as f:
@@ -53,7 +54,7 @@ def main():
         w = csv.DictWriter(f, fieldnames=["backend", "seed", *QUANTITIES])
         w.writeheader()
         w.writerows(runs)
-    result = {"command": "crumple run --grid 16 --frames 150 --seed S --backend B", "seeds": seeds,
+    result = {"command": "crumple run --paper --grid 16 --frames 150 --seed S --backend B", "seeds": seeds,
               "runs": len(runs), **{q: band([r[q] for r in runs]) for q in QUANTITIES}}
     with open(os.path.join(OUT, "band.json"), "w") as f:
         json.dump(result, f, indent=2)

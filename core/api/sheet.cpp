@@ -19,7 +19,7 @@ namespace crumple {
 const char* version() { return CRUMPLE_VERSION_STRING; }
 
 Params embedding_params() {
-  Params p;
+  Params p = default_params();
   p.scene = Scene::Free;
   p.squeeze = 1.0;
   return p;

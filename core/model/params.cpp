@@ -49,6 +49,18 @@ double Params::budget_factor(int live_vertices) const {
   return std::max(0.0, (max_vertices - live_vertices) / (max_vertices - start));
 }
 
+Params paper_params() { return Params{}; }
+
+Params default_params() {
+  Params p;
+  p.integrator = Integrator::Explicit;
+  p.viscosity = kDefaultViscosity;
+  p.auto_substeps = true;
+  p.max_step = kDefaultMaxStep;
+  p.adapt_per_frame = true;
+  return p;
+}
+
 const char* to_string(Scene s) { return s == Scene::Sphere ? "sphere" : s == Scene::Free ? "free" : "hang"; }
 const char* to_string(Integrator i) {
   return i == Integrator::Approx     ? "approx"

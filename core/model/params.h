@@ -86,6 +86,22 @@ struct Params {
   std::string validate() const;
 };
 
+/// The paper's viscosity at its own frame rate, made a constant (docs/DECISIONS.md D17):
+/// c = h_ref kappa with h_ref = 1/60 s and the default kappa.
+inline constexpr double kDefaultViscosity = 1.0e4 / 60.0;
+/// The default configuration's largest step in seconds (docs/DECISIONS.md D28).
+inline constexpr double kDefaultMaxStep = 1.0 / (60.0 * 64);
+
+/// The paper's configuration (MODEL.md §3): the approximate implicit step (its isotropic
+/// Jacobian, one sweep), one step per 1/60 s frame, fracture and restoration after every step,
+/// no viscosity. Params{} is this; `crumple run --paper` starts from it.
+Params paper_params();
+/// The command's default (docs/DECISIONS.md D28): the same model with the viscosity of D17 in
+/// physical units, integrated by symplectic Euler at substeps chosen each frame (stable for the
+/// current mesh, and no step above kDefaultMaxStep), fracture and restoration once per frame. It
+/// converges with the step where the paper's configuration changes with the frame rate.
+Params default_params();
+
 const char* to_string(Scene);
 const char* to_string(Integrator);
 const char* to_string(RestoreForm);

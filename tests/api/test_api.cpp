@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "crumple/crumple.h"
+#include "../support/fixed_step.h"
 
 namespace crumple {
 namespace {
@@ -19,6 +20,7 @@ SheetDesc small_grid(const std::string& backend, int n = 16) {
   d.grid = n;
   d.backend = backend;
   d.threads = 1;
+  d.params = test::fixed_step_params();
   return d;
 }
 
@@ -79,14 +81,14 @@ TEST(ApiErrors, OneLineWithTheCommandsText) {
 // or not reported (then a renderer would draw NaNs), and steps taken after it.
 TEST(ApiErrors, UnstableLikeTheCommandAndThenRefused) {
   SheetDesc d = small_grid("reference", 10);
-  d.params = Params{};  // the command's defaults
+  d.params = paper_params();  // the command with --paper
   d.params.scene = Scene::Free;
   d.params.integrator = Integrator::Explicit;
   d.params.kappa = 1e6;
   Sheet s = Sheet::create(d);
   std::string error;
   for (int f = 0; f < 200 && error.empty(); ++f) error = s.try_step(d.params.frame_dt);
-  EXPECT_EQ(error, command_error("run --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200"));
+  EXPECT_EQ(error, command_error("run --paper --backend reference --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200"));
   const std::uint64_t steps = s.steps();
   EXPECT_EQ(s.try_step(d.params.frame_dt), error);
   EXPECT_EQ(s.steps(), steps);

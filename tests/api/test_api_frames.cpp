@@ -10,6 +10,7 @@
 #include <string>
 
 #include "crumple/crumple.h"
+#include "../support/fixed_step.h"
 #include "sim/backends.h"
 #include "sim/run.h"
 
@@ -135,6 +136,7 @@ TEST_P(ApiFrames, StepsTimeIsPartOfTheCall) {
   d.grid = 16;
   d.backend = GetParam();
   d.threads = 1;
+  d.params = test::fixed_step_params();
   d.params.substeps = 2;
   Sheet sheet = Sheet::create(d);
   FrameEvents ev = sheet.step(1.0 / 240);  // half a step owed: no step

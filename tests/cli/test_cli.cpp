@@ -28,6 +28,38 @@ TEST(Cli, RunWritesStatsAndFinalObj) {
   EXPECT_FALSE(fs::exists(d / "frame_00015.obj"));
 }
 
+// The substeps column of the last row of a 2-frame run's stats.csv.
+int last_substeps(const std::string& args) {
+  const fs::path d = fresh_dir("substeps");
+  const Result r = crumple("run --grid 8 --frames 2 --quiet " + args + " --out " + d.string());
+  EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+  std::ifstream stats(d / "stats.csv");
+  std::string line, last;
+  while (std::getline(stats, line)) last = line;
+  return std::stoi(last.substr(last.rfind(',') + 1));
+}
+
+// Catches a default other than D28's substep choice (a fixed step count, or no step bound: at
+// kappa 1e4 stability alone takes 1 step a frame), --paper ignored, and --paper applied after
+// the options given with it (then their order would matter).
+TEST(Cli, DefaultChoosesSubstepsAndPaperIsOneFlagAway) {
+  EXPECT_EQ(last_substeps(""), 64);  // the default's bound: 1/3840 s steps in 1/60 s frames
+  EXPECT_EQ(last_substeps("--paper"), 1);
+  EXPECT_EQ(last_substeps("--paper --substeps 4"), 4);
+  EXPECT_EQ(last_substeps("--substeps 4 --paper"), 4);
+  EXPECT_EQ(last_substeps("--frame-dt 0.0078125"), 30);  // 1/128 s frames: ceil(3840 / 128)
+}
+
+// Catches a default whose step is not chosen for stability: at kappa 1e7 the same run from the
+// paper's base with symplectic Euler at one step a frame (what the default would be without
+// the choice) goes unstable, the default does not.
+TEST(Cli, DefaultStaysBoundedWhenStiff) {
+  const std::string run = "run --grid 10 --scene free --kappa 1e7 --frames 20 --quiet";
+  const Result r = crumple(run);
+  EXPECT_EQ(r.code, 0) << r.err;
+  expect_error(crumple(run + " --paper --integrator explicit --viscosity 166.67"), 3, "unstable at frame");
+}
+
 // Catches a missing --version or one that disagrees with CMake's project version.
 TEST(Cli, VersionIsTheProjectVersion) {
   const Result r = crumple("--version");
@@ -70,7 +102,7 @@ TEST(Cli, BadFilesExitTwoAndWriteNothing) {
 
 TEST(Cli, UnstableRunExitsThreeNamingTheFrame) {
   const fs::path d = fresh_dir("unstable");
-  const Result r = crumple("run --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200 --out " + d.string());
+  const Result r = crumple("run --paper --backend reference --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200 --out " + d.string());
   expect_error(r, 3, "unstable at frame");
   EXPECT_FALSE(fs::exists(d / "final.obj"));
 }

@@ -55,7 +55,7 @@ TEST(CliOut, NonEmptyFolderNeedsForceWhichReplacesOnlyCrumplesFiles) {
 TEST(CliOut, UnstableRunLeavesNoEarlierFinalObj) {
   const fs::path d = fresh_dir("unstable_reuse");
   ASSERT_EQ(crumple("run --grid 6 --frames 2 --quiet --out " + d.string()).code, 0);
-  const Result r = crumple("run --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200 --force --out " +
+  const Result r = crumple("run --paper --backend reference --grid 10 --scene free --integrator explicit --kappa 1e6 --frames 200 --force --out " +
                            d.string());
   expect_error(r, 3, "unstable at frame");
   EXPECT_FALSE(fs::exists(d / "final.obj"));
