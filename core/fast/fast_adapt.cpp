@@ -65,9 +65,14 @@ void prefetch_restore(const Topology& m, int e) {
 // the previous event's: prefetching the next events' lines while one applies overlaps those
 // misses (the events themselves still apply in order). kFar ahead: the first lines (the edge,
 // the record); kNear ahead: what those lines point to.
-constexpr int kFar = 8, kNear = 3;
-constexpr int kRoundGrain = 64;  ///< smaller split rounds run inline: a parallel loop costs ~10 us
-constexpr int kWaveGrain = 32;   ///< a restore costs about as much as a split (3-4 us)
+constexpr int kFar = 8;   ///< beyond kNear, so the first lines are cached when kNear reads through them
+constexpr int kNear = 3;  ///< few: kNear events' lines (some fifty each) must stay in L1 until used
+constexpr int kRoundGrain = 64;  ///< smaller split rounds run inline: too few splits to repay a parallel loop's start
+constexpr int kWaveGrain = 32;   ///< waves are smaller than rounds, and a restore costs about what a split does
+constexpr int kTestGrain = 4096;       ///< adapt_test streams cheaply over every edge: large chunks
+constexpr int kCandidateGrain = 256;   ///< a candidate read misses several lines: smaller chunks repay
+constexpr int kRestoreTestGrain = 128; ///< a restore test reads a record and its triangles: more per item
+constexpr int kRenewGrain = 512;       ///< an area or a few normals per triangle: less than an event
 
 }  // namespace
 
@@ -86,7 +91,7 @@ void FastSimulator::adapt_decide() {
   c.fracture = params_.fracture;
   c.restoration = params_.restoration;
   decisions_.resize(std::size_t(topo_.E.size()));
-  par_.run_lanes(topo_.E.size(), 4096, [&](int b, int e) { adapt_test(topo_, c, decisions_.data(), b, e); });
+  par_.run_lanes(topo_.E.size(), kTestGrain, [&](int b, int e) { adapt_test(topo_, c, decisions_.data(), b, e); });
 }
 
 StepEvents FastSimulator::adapt_apply() {
@@ -128,7 +133,7 @@ void FastSimulator::collect_events() {
   // events' slots. A pending event's edge keeps its slot through the pass: splits free no
   // edge, and restores free only mesh edges, never a pending (auxiliary) one.
   const int n = int(decisions_.size());
-  constexpr int kBlock = 16384;
+  constexpr int kBlock = 16384;  // ids per block: short per-block lists, and blocks for every thread on a large mesh
   const int blocks = (n + kBlock - 1) / kBlock;
   by_id_.resize(std::size_t(n), 0);  // all 0 between passes
   auto each_nonzero = [](const std::uint8_t* bytes, int begin, int end, auto&& f) {
@@ -145,14 +150,14 @@ void FastSimulator::collect_events() {
       ++k;
     }
   };
-  par_.run(blocks, 1, [&](int b0, int b1) {
+  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b)
       each_nonzero(decisions_.data(), b * kBlock, std::min(n, (b + 1) * kBlock),
                    [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
   });
   std::vector<std::vector<int>>& found = s.found;  // per block and kind: slots in id order
   found.resize(2 * std::size_t(blocks));
-  par_.run(blocks, 1, [&](int b0, int b1) {
+  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       found[2 * b].clear(), found[2 * b + 1].clear();
       each_nonzero(by_id_.data(), b * kBlock, std::min(n, (b + 1) * kBlock), [&](int id) {
@@ -204,7 +209,7 @@ int FastSimulator::apply_splits() {
   // What the serial pre-pass needs of each candidate, read in parallel into a compact array
   // (the pre-pass then touches only it, the stamps and the rounds).
   candidates.resize(s.splits.size());
-  par_.run(int(s.splits.size()), 256, [&](int b, int e) {
+  par_.run(int(s.splits.size()), kCandidateGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_edge(m, s.splits[k + kFar]);
       candidates[k] = split_candidate(s.splits[k]);
@@ -306,7 +311,7 @@ int FastSimulator::apply_restores() {
   enum : std::uint8_t { kNever, kNotNow, kRestorable };  // a candidate's answer on the state after the splits
   std::vector<RestoreCandidate>& candidates = s.restore_candidates;
   candidates.resize(std::size_t(nr));
-  par_.run(nr, 128, [&](int b, int e) {
+  par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E.record[wave_restores[k + kNear]]]);
       const int edge = wave_restores[k];
@@ -379,12 +384,12 @@ void FastSimulator::renew_normals() {
   const float unit = length_unit();
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
   // Both loops prefetch what the changed triangle kNear on reads: its corners' positions, then
-  // its corners' triangle lists (the triangle lines themselves, kFar on): renewal 2.4-2.6 ->
-  // 1.9-2.1 ms at N = 256, 1 thread (3 interleaved pairs). Prefetching the areas those lists
-  // name, one triangle on, measured slower (2.3-2.9 ms).
+  // its corners' triangle lists (the triangle lines themselves, kFar on): the changed triangles
+  // are scattered, so each one's lines miss. Not the areas those lists name: prefetching them too
+  // made the renewal slower (docs/PERFORMANCE.md).
   const Vertices& V = topo_.V;
   const Triangles& T = topo_.T;
-  par_.run(int(changed.size()), 512, [&](int b, int e) {
+  par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
       if (k + kNear < e)
@@ -392,7 +397,7 @@ void FastSimulator::renew_normals() {
       triangle_areas(topo_, unit, changed[k], changed[k] + 1);
     }
   });
-  par_.run(int(changed.size()), 512, [&](int b, int e) {
+  par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e)
         for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.n_tris[v]), prefetch_read(topo_.tris_of(v));

@@ -8,7 +8,9 @@
 namespace crumple::fast {
 
 namespace {
-constexpr int kGrain = 2048;  ///< minimum vertices per parallel chunk
+/// Minimum vertices per parallel chunk: a few shape tests per vertex, as cheap as a force pass's
+/// item, so the same grain as those (fast_sim.cpp).
+constexpr int kGrain = 2048;
 
 /// Spheres then planes, in list order, on the vertex slots [begin, end). Float, like the rest of
 /// the backend; each vertex is independent, so any thread count gives the same bits.

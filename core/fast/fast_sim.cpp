@@ -11,8 +11,13 @@
 namespace crumple::fast {
 
 namespace {
-constexpr int kGrain = 2048;       ///< minimum items per parallel chunk
-constexpr int kReduceBlock = 8192; ///< fixed block of the deterministic reductions
+/// Minimum items per parallel chunk of a per-element pass: large enough that a chunk's
+/// scheduling is small beside its work, small enough that a mid-size sheet gives every thread
+/// several chunks.
+constexpr int kGrain = 2048;
+/// Fixed block of the deterministic reductions: fixed, so the sums do not depend on the thread
+/// count; large, so the serial sum of the block results stays short.
+constexpr int kReduceBlock = 8192;
 
 }  // namespace
 

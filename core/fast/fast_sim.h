@@ -6,21 +6,13 @@
 //              Springs, bending and predictor are computed per element and gathered per
 //              vertex over its adjacency lists: no scatter, no atomics, one summation order.
 //              The gather sums whole 64-byte records as wide rows (wide.h), the first 8
-//              entries of a list in a loop of fixed length (gather 12.3 -> 7.8 ms at N = 256).
+//              entries of a list in a loop of fixed length (no exit mispredicted per list).
 //              kappa_e = kappa (m_a + m_b) is added from the masses in the edge pass (D15).
-//              (Measured, and not kept: a 64-byte packed row of x, v and n per vertex for the
-//              edge pass, 5.5 -> 9.5 ms; streaming stores of the edge records, no gain;
-//              transparent huge pages for the large arrays, no gain on this VM, and 2 MiB-
-//              aligned arrays alias in the caches.)
-//              (Measured, and not kept: the bending sign from squared lengths, sign(|g|^2 -
-//              |o|^2), instead of two square roots: 5.3-5.5 against 5.4-7.3 ms at N = 256, no
-//              gain; the square roots are not what bounds the edge pass.)
-//              (Measured, and not kept: springs evaluated per vertex from its side, twice per
-//              spring, with a 16-byte bending output per edge: 1.2-1.6x slower than this at
-//              N = 128 and 256, the square roots costing more than the per-edge output.)
+//              Springs are evaluated once per edge, not once from each side: a second set of
+//              square roots would cost more than the per-edge output does. What was measured
+//              and not kept for this pass is in docs/PERFORMANCE.md.
 //   integrate  K x jacobi_sweep (double-buffered guesses, each neighbour's mass in w, so a
-//              sweep reads one 16-byte value per neighbour and nothing per edge: the integrate
-//              pass 1.7x faster than reading kappa_e per spring, N = 128, same-run A/B) ->
+//              sweep reads one 16-byte value per neighbour and nothing per edge) ->
 //              momentum_drift (fixed-block reduction) -> advance (new v and x, sphere
 //              constraint). Explicit Euler replaces the sweeps by explicit_velocity;
 //              Baraff-Witkin runs on the reference path.

@@ -27,7 +27,7 @@ Totals FastSimulator::totals() const {
   const int nv = V.size(), ne = E.size();
   const int vblocks = (nv + kTotalsBlock - 1) / kTotalsBlock, eblocks = (ne + kTotalsBlock - 1) / kTotalsBlock;
   std::vector<TotalsPart> parts(std::size_t(std::max(vblocks, eblocks)));
-  par_.run(vblocks, 1, [&](int b0, int b1) {
+  par_.run(vblocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       TotalsPart& t = parts[b];
       for (int id = b * kTotalsBlock, last = std::min(nv, id + kTotalsBlock); id < last; ++id) {
@@ -47,7 +47,7 @@ Totals FastSimulator::totals() const {
       }
     }
   });
-  par_.run(eblocks, 1, [&](int b0, int b1) {
+  par_.run(eblocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       TotalsPart& t = parts[b];
       for (int id = b * kTotalsBlock, last = std::min(ne, id + kTotalsBlock); id < last; ++id) {

@@ -18,15 +18,10 @@ namespace crumple::fast {
 // GCC honours __restrict on parameters, not on local pointers: each vectorized kernel is a
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
 // whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
-// CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel where measurement says gathers lose:
-// on this Zen 4 the AVX-512 build of the edge pass took 8.9 ms against 4.6 ms scalar, and the
-// triangle pass 1.9 against 1.4 ms (N = 256, BM_Pass, results/amd-epyc_avx512/REPORT.md of
-// commit d7b599a): their loads are random gathers of positions and normals, and Zen 4 executes
-// vector gathers slower than the scalar loads they replace. Re-measured at 2a5d532 with a
-// branch-free edge body that GCC vectorizes: 14.5 against 5.6 ms (N = 256, one kernel on one
-// prepared state): a 16-lane gather costs about 0.35 ns per float here (one core, L2-resident
-// data), and the edge pass needs ~34 of them per 16 edges, as much as the whole scalar body;
-// GCC also scatters the 64-byte records with single-float stores.
+// CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel whose loads are random gathers (of
+// positions and normals: the edge and triangle passes): scalar, because Zen 4 executes vector
+// gathers slower than the scalar loads they replace, and GCC scatters the 64-byte records with
+// single-float stores (docs/PERFORMANCE.md).
 namespace {
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
                          const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
@@ -69,10 +64,10 @@ void for_list(const std::int32_t* list, int n, F f) {
 
 // The 64-byte records the gather reads are scattered, and a vertex's loads are few, so the
 // gather fetches the first kFixed records of the vertex kAhead places on while it sums this one
-// (entries past a list's count fetch the zero record). Gather 7.2 -> 4.5 ms at N = 256, 1 thread
-// (medians of 3, one prepared state); the same for the 16-byte records of the Jacobi sweep and
-// the normals measured slower (1.3 -> 1.7, 0.86 -> 1.44 ms): those mostly hit the cache.
-constexpr int kAhead = 6;
+// (entries past a list's count fetch the zero record). The Jacobi sweep and the normals do not:
+// their 16-byte records mostly hit the cache, and prefetching them made those passes slower
+// (docs/PERFORMANCE.md).
+constexpr int kAhead = 6;  ///< far enough for the records to arrive, near enough to stay in L1
 void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, int shift) {
   for (int k = 0; k < kFixed; ++k) __builtin_prefetch(k < count ? &records[list[k] >> shift] : &kZeroRow);
 }
@@ -211,7 +206,7 @@ void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
       sum += (c.implicit * (mass + o[3])) * o;  // W_e (the neighbour's mass in w) times its guess
     };
     // for_list's loops, written out: through for_list GCC contracts this multiply-add into FMAs
-    // differently, which changes the rounding of every run (state hashes differ from 15d8759).
+    // differently, which changes the rounding of every run (the state hashes would change).
     for (int k = 0; k < kFixed; ++k) add(k < n ? &g[nbrs[k]] : &kZero4);
     for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
     const float sx = sum[0], sy = sum[1], sz = sum[2];

@@ -9,8 +9,12 @@ namespace crumple::fast {
 
 namespace {
 
-constexpr int kGrain = 4096;  ///< minimum items per parallel chunk of a permutation
-constexpr int kAhead = 16;    ///< how far ahead a permutation prefetches its sources
+/// Minimum items per parallel chunk (and per sort block) of relayout's loops: an item is a load
+/// or two and a store, so chunks must be large to repay their scheduling.
+constexpr int kGrain = 4096;
+/// How far ahead a permutation or repack prefetches its scattered sources: its body is a few
+/// instructions, so a miss must start many items before its item is reached.
+constexpr int kAhead = 16;
 
 /// Spreads the low 21 bits of v to every third bit (one axis of a 3-D Morton code).
 std::uint64_t spread3(std::uint64_t v) {
@@ -35,7 +39,7 @@ void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets
   const int blocks = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
   const int per = (n + blocks - 1) / blocks;
   hist.assign(std::size_t(blocks) * buckets, 0);
-  par.run(blocks, 1, [&](int b0, int b1) {
+  par.run(blocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       int* h = &hist[std::size_t(b) * buckets];
       for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) ++h[key(k)];
@@ -44,7 +48,7 @@ void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets
   int sum = 0;
   for (int c = 0; c < buckets; ++c)
     for (int b = 0; b < blocks; ++b) sum += std::exchange(hist[std::size_t(b) * buckets + c], sum);
-  par.run(blocks, 1, [&](int b0, int b1) {
+  par.run(blocks, kBlockGrain, [&](int b0, int b1) {
     for (int b = b0; b < b1; ++b) {
       int* h = &hist[std::size_t(b) * buckets];
       for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) place(k, h[key(k)]++);
@@ -110,7 +114,8 @@ void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vect
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       // The sources are scattered (new elements sit at the end until a relayout): fetch them
-      // ahead. (Prefetching the renaming tables' entries as well measured slower.)
+      // ahead. Not the renaming tables' entries: prefetching those too made it slower
+      // (docs/PERFORMANCE.md).
       if (k + kAhead < e) __builtin_prefetch(&src[order[k + kAhead]]);
       dst[k] = f(src[order[k]]);
     }

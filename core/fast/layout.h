@@ -4,9 +4,8 @@
 // outputs, an edge reads its endpoints and wings. On the input mesh neighbours sit in nearby
 // slots; refinement appends each new vertex, edge and triangle at the end of the arrays (or in
 // a recycled slot), so after a few hundred frames of crumpling most neighbour reads miss every
-// cache. Measured before this existed (N = 256, prepared crumple, 1 thread): the force and
-// integration passes ran 3.2x slower per element than on the fresh grid, as slow as on a grid
-// whose vertex order had been shuffled at random.
+// cache, and the force and integration passes slow down to what they cost on a grid whose
+// vertex order was shuffled at random (docs/PERFORMANCE.md).
 //
 // relayout() reorders every slot, keeping every logical id (topology.h), every adjacency list's
 // order and every value, so a step after it computes bit for bit what it would have without it,

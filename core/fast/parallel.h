@@ -28,6 +28,10 @@
 
 namespace crumple::fast {
 
+/// The grain of a loop over blocks already cut to a chunk's worth of work each (fixed-block
+/// reductions and scans): one block per chunk, so any thread may take any block.
+constexpr int kBlockGrain = 1;
+
 class Parallel {
  public:
   /// threads >= 1: a task_arena of that many (1: plain loops, no TBB at all). threads == 0:
@@ -87,7 +91,7 @@ class Parallel {
   void sum3(int n, int block, const Partial& partial, double out[3]) const {
     const int blocks = (n + block - 1) / block;
     std::vector<double> parts(3 * std::size_t(blocks), 0.0);
-    run(blocks, 1, [&](int b0, int b1) {
+    run(blocks, kBlockGrain, [&](int b0, int b1) {
       for (int b = b0; b < b1; ++b) partial(b * block, std::min(n, (b + 1) * block), &parts[3 * std::size_t(b)]);
     });
     out[0] = out[1] = out[2] = 0;

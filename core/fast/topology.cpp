@@ -49,7 +49,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
 // The slot of a recycled id is a random read (phys[id]), and a pass takes thousands in a row:
 // each take prefetches the phys entry of the id that the take kTakeAhead + 1 from now will pop,
 // so that the pops find it in cache.
-constexpr std::size_t kTakeAhead = 8;
+constexpr std::size_t kTakeAhead = 8;  ///< enough takes between for the miss to resolve, few enough that the line stays cached
 template <class Kind>
 int take_slot(Kind& k) {
   const std::size_t size = k.lid.size();

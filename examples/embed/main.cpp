@@ -8,9 +8,10 @@
 #include <string>
 
 int main() {
-  crumple::SheetDesc desc;  // a 64 x 64 grid, fast backend, run in this thread's oneTBB arena
+  // A 64 x 64 grid, fast backend, run in this thread's oneTBB arena, the default configuration
+  // (its substeps chosen each frame: docs/DECISIONS.md D28).
+  crumple::SheetDesc desc;
   desc.params.gravity = 2.0;  // m/s^2: what the default (soft) springs hang from
-  desc.params.substeps = 2;   // h = 1/120 s: this scene runs unstable at h = 1/60 on the reference
   std::string error;
   std::optional<crumple::Sheet> made = crumple::Sheet::try_create(desc, error);
   if (!made) {
