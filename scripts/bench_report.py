@@ -34,6 +34,7 @@ FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(
 STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
+DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
@@ -374,6 +375,28 @@ def roofline_section(benches, charts):
     return lines
 
 
+def default_section(series, paper):
+    """BM_Default beside BM_Frame: what the converging default (D28) costs against the paper's step."""
+    if not series:
+        return []
+    lines = ["## The default configuration against the paper's", "",
+             "`BM_Default/<backend>/<threads>/<N>` times one `Sheet::step` frame of the command's default "
+             "configuration (docs/DECISIONS.md D28: symplectic Euler with the viscosity, substeps chosen per frame, "
+             "fracture once per frame) from its own prepared state, as `BM_Frame` does for the paper's. Medians; "
+             "events per frame from the counters.", "",
+             "| configuration | N | default ms/frame | splits / restores per frame | paper ms/frame | "
+             "splits / restores per frame | default / paper |", "|---|---:|---:|---:|---:|---:|---:|"]
+    for key in order_configs(series):
+        for n, b in sorted(series[key].items()):
+            p = paper.get(key, {}).get(n)
+            pt = (f"{fmt_ms(p.median())} | {p.counter('splits'):,.0f} / {p.counter('restores'):,.0f} | "
+                  f"{b.median() / p.median():.1f}x") if p and p.times else "- | - | -"
+            lines.append(f"| {short(key)} | {n} | {fmt_ms(b.median())} | {b.counter('splits'):,.0f} / "
+                         f"{b.counter('restores'):,.0f} | {pt} |")
+    lines.append("")
+    return lines
+
+
 def events_section(benches):
     rows = []
     for name, b in benches.items():
@@ -559,6 +582,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     lines.append("")
     lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
     lines += events_section(benches)
+    lines += default_section(frame_series(benches, DEFAULT), series)
     lines += roofline_section(benches, charts)
     if "passes.png" in charts:
         lines.append("## Time per pass")
