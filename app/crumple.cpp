@@ -77,6 +77,9 @@ int main(int argc, char** argv) {
            p.adapt_per_frame = s == "frame";
          },
          "fracture and restoration after every step (the paper's) or once per frame (default frame; --paper: step)");
+  run->add_option("--adapt-every", p.adapt_every,
+                  "--adapt frame: the pass once per this many seconds instead of once per frame (0)")
+      ->capture_default_str();
   run->add_option("--integrator", p.integrator, "approx | explicit | implicit | xpbd")
       ->transform(choice<Integrator>({{"approx", Integrator::Approx},
                                       {"explicit", Integrator::Explicit},

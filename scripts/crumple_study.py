@@ -68,6 +68,9 @@ class Runner:
                 self.save()
         return [self.cache[k] for k in keys]
 
+    def cached(self, arg_lists):
+        return all(" ".join(str(a) for a in args) in self.cache for args in arg_lists)
+
     @staticmethod
     def _one(args):
         with tempfile.TemporaryDirectory() as d:
@@ -197,6 +200,10 @@ def stage_converge(runner, quick, only=None):
 
 ERROR_STATS = ["splits", "restores", "vertices", "radius_norm", "crease_norm", "edge_mean"]
 C = f"{DEFAULT_C:.6g}"
+# The command's default (D28) spelled out over the --paper base that crumple_stats runs from.
+DEFAULT_MAX_STEP = 1.0 / 3840
+DEFAULT_OPTIONS = ["--integrator", "explicit", "--viscosity", C, "--substeps", "auto", "--max-step",
+                   f"{DEFAULT_MAX_STEP:.9g}", "--adapt", "frame", "--adapt-every", f"{1 / 240:.9g}"]
 # name -> (crumple options, backend, substep settings); every method but "paper" and "undamped"
 # carries the default viscosity c (D17).
 METHODS = {
@@ -211,7 +218,14 @@ METHODS = {
     "xpbd": (["--integrator", "xpbd", "--viscosity", C], "reference", [4, 8, 16, 32]),
     "implicit": (["--integrator", "implicit", "--cg-tolerance", "1e-4", "--viscosity", C], "reference", [1, 2, 4]),
     "undamped": (["--integrator", "explicit"], "fast", [16]),
+    # the command's default (D28): its own substeps (64 a frame at kappa 1e4), the pass at 240 Hz
+    "default": (DEFAULT_OPTIONS, "fast", [64]),
 }
+
+
+def step_options(S, opts):
+    """--substeps S, unless the method's options choose their own (the default's auto)."""
+    return [] if "--substeps" in opts else ["--substeps", S]
 PARETO_CASES = {"N32_k1e4": (["--grid", 32], 1e4), "N64_k1e4": (["--grid", 64], 1e4),
                 "N128_k1e4": (["--grid", 128], 1e4)}
 
@@ -232,7 +246,7 @@ def errors(summ, ref):
     return {"per_stat": err, "max": max(err.values()), "noise": noise}
 
 
-def stage_pareto(runner, quick, only=None):
+def stage_pareto(runner, quick, only=None, fast_only=False):
     seeds = range(1, 4 if quick else 9)
     result = load_result().get("pareto", {})
     for label, (mesh, kappa) in PARETO_CASES.items():
@@ -242,10 +256,12 @@ def stage_pareto(runner, quick, only=None):
         entry = {"reference_substeps": ref_s, "reference": ref, "methods": {}}
         for name, (opts, backend, settings) in METHODS.items():
             if backend == "reference" and mesh[0] == "--grid" and mesh[1] > TIMING_REFERENCE_UP_TO:
-                continue  # hours per seed on the reference backend
+                continue  # hours per seed on the reference backend beyond N = 64
             for S in settings:
-                lines = [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa, "--substeps", S]
-                         + opts + mesh for s in seeds]
+                lines = [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa]
+                         + step_options(S, opts) + opts + mesh for s in seeds]
+                if backend == "reference" and fast_only and not runner.cached(lines):
+                    continue  # --fast-only: a reference method only where its runs are all cached
                 try:
                     summ = summary(runner.run(lines))
                 except LookupError:  # --cached-only: what was run
@@ -277,12 +293,12 @@ def timing_configs(n):
     for name, (opts, backend, settings) in METHODS.items():
         if backend == "reference" and n > TIMING_REFERENCE_UP_TO:
             continue
-        if n >= 256 and name not in ("paper", "explicit", "explicit-F"):
+        if n >= 256 and name not in ("paper", "explicit", "explicit-F", "default"):
             continue
         threads = 2 if backend == "fast" else 1
         for S in settings:
             yield f"{name}/S{S}", ["--grid", n, "--seed", TIMING_SEED, "--backend", backend, "--threads",
-                                   threads, "--kappa", 1e4, "--substeps", S] + opts
+                                   threads, "--kappa", 1e4] + step_options(S, opts) + opts
 
 
 def stage_timing(_runner, quick, only=None):
@@ -317,6 +333,48 @@ def stage_timing(_runner, quick, only=None):
         data["timing"] = result
         save_result(data)
     return result
+
+
+FRAME_DTS = [(30, "0.0333333333333333"), (60, "0.0166666666666667"), (120, "0.00833333333333333"),
+             (240, "0.00416666666666667")]
+
+
+def stage_framerate(runner, quick, only=None):
+    """The default at 1/30, 1/60, 1/120 and 1/240 s frames over the same 3 s: each statistic's seed
+    mean against the 60 Hz one, in units of the larger seed spread."""
+    seeds = range(1, 4 if quick else 9)
+    sizes = [32] if quick else [32, 64]
+    result = {"options": DEFAULT_OPTIONS, "seeds": len(seeds), "sizes": {}}
+    for n in sizes:
+        if only and f"N{n}" not in only:
+            continue
+        rows = {}
+        for fps, dt in FRAME_DTS:
+            lines = [["--grid", n, "--seed", s, "--backend", "fast", "--threads", 1, "--frame-dt", dt,
+                      "--frames", 3 * fps] + DEFAULT_OPTIONS for s in seeds]
+            rows[str(fps)] = summary(runner.run(lines))
+        base = rows["60"]
+        for fps, summ in rows.items():
+            summ["vs_60"] = {s: (summ[s]["mean"] - base[s]["mean"]) / max(summ[s]["sd"], base[s]["sd"])
+                             for s in ERROR_STATS if summ[s]["sd"] and base[s]["sd"]}
+            summ["rel_60"] = {s: summ[s]["mean"] / base[s]["mean"] - 1 for s in ERROR_STATS}
+            print(f"N={n} {fps} fps: " + " ".join(f"{s}={summ[s]['mean']:.4g} ({summ['rel_60'][s]:+.1%}, "
+                                                  f"{summ['vs_60'].get(s, 0):+.1f} sd)" for s in ERROR_STATS), flush=True)
+        result["sizes"][f"N{n}"] = rows
+    return result
+
+
+def table_framerate(data):
+    fr = data.get("framerate")
+    if not fr:
+        return "(not run)"
+    lines = ["| case | frames per second | " + " | ".join(ERROR_STATS) + " |", "|---" * (len(ERROR_STATS) + 2) + "|"]
+    for label, rows in fr["sizes"].items():
+        for fps, summ in rows.items():
+            lines.append(f"| {label} | {fps} | " + " | ".join(
+                f"{summ[s]['mean']:.4g} ({summ['rel_60'][s]:+.1%}, {summ['vs_60'].get(s, 0):+.1f} sd)"
+                for s in ERROR_STATS) + " |")
+    return "\n".join(lines)
 
 
 SHOWN = ["splits", "restores", "vertices", "radius_norm", "crease_norm", "edge_mean"]
@@ -501,17 +559,20 @@ def stage_report(_runner, _quick):
         f.write("\n## Calibration of the viscosity\n" + table_calibration(data) + "\n")
         f.write("\n## Error against the converged crumple\n" + table_pareto(data) + "\n")
         f.write("\n## The cheapest configuration within 10 % of converged\n" + table_cheapest(data) + "\n")
+        f.write("\n## The default at four frame rates (seed mean, against 60 fps: relative and in seed "
+                "spreads)\n" + table_framerate(data) + "\n")
     return data.get("report")
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "timing", "report"])
+    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "timing", "framerate", "report"])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--fresh", action="store_true")
     p.add_argument("--cached-only", action="store_true", help="use only cached runs (converge: stop at the "
                    "last level run in full)")
+    p.add_argument("--fast-only", action="store_true", help="pareto: only the methods of the fast backend")
     p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64 ...")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
@@ -523,8 +584,9 @@ def main(argv=None):
         stage_report(runner, a.quick)
         return
     stages = {"converge": lambda: stage_converge(runner, a.quick, a.cases),
-              "pareto": lambda: stage_pareto(runner, a.quick, a.cases),
+              "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only),
               "timing": lambda: stage_timing(runner, a.quick, a.cases),
+              "framerate": lambda: stage_framerate(runner, a.quick, a.cases),
               "calibrate": lambda: stage_calibrate(runner, a.quick, a.sizes, a.substeps)}
     result = stages[a.stage]()
     data = load_result()  # read again: another stage may have saved its part meanwhile

@@ -25,7 +25,7 @@ std::string Params::validate() const {
       {"sphere-end", sphere_end, 0.01, 100.0}, {"sphere-time", sphere_time, 0.0, 1e6},
       {"gravity", gravity, -1e4, 1e4},       {"perturb", perturb, 0.0, 1.0},       {"mass", total_mass, 1e-9, 1e9},
       {"frame-dt", frame_dt, 1e-6, 1.0},     {"substeps", double(substeps), 1, 10000},
-      {"max-step", max_step, 0.0, 1.0},
+      {"max-step", max_step, 0.0, 1.0},      {"adapt-every", adapt_every, 0.0, 1.0},
       {"sweeps", double(sweeps), 1, 1000},   {"cg-tolerance", cg_tolerance, 1e-15, 0.5},
       {"cg-max-iterations", double(cg_max_iterations), 1, 1e6},
       {"kappa", kappa, 0.0, 1e12},           {"bend", bend, 0.0, 1e12},
@@ -58,6 +58,7 @@ Params default_params() {
   p.auto_substeps = true;
   p.max_step = kDefaultMaxStep;
   p.adapt_per_frame = true;
+  p.adapt_every = kDefaultAdaptEvery;
   return p;
 }
 

@@ -2,6 +2,7 @@
 // Defaults give a plausible crumple of a 32 x 32 sheet in the sphere scene; README.md lists them.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 
@@ -42,6 +43,9 @@ struct Params {
   bool adapt_per_frame = false;          ///< fracture and restoration once per frame, after its
                                          ///< last step, with P over the frame (MODEL.md §4;
                                          ///< docs/DECISIONS.md D27); else after every step
+  double adapt_every = 0;                ///< adapt_per_frame: the pass once per this many seconds
+                                         ///< of simulated time instead of once per frame (0),
+                                         ///< so that it does not follow the frame rate (D28)
   Integrator integrator = Integrator::Approx;
   int sweeps = 1;                        ///< K, Jacobi sweeps of the approximate implicit method
   Predictor predictor = Predictor::Bounded;  ///< bounded (stable for any h) or the paper's explicit
@@ -75,7 +79,11 @@ struct Params {
   /// Time step h.
   double h() const { return frame_dt / substeps; }
   /// The interval one fracture/restoration pass covers: P over it is 1 - (1 - P)^(t / h_ref).
-  double adapt_interval() const { return adapt_per_frame ? frame_dt : h(); }
+  /// Never shorter than a step: the pass runs after steps.
+  double adapt_interval() const {
+    if (!adapt_per_frame) return h();
+    return adapt_every > 0 ? std::max(adapt_every, h()) : frame_dt;
+  }
 
   /// The vertex budget's shaping factor for a pass that starts with `live_vertices` (D22): 1
   /// without a budget or up to kBudgetSoftStart of it, then linear down to 0 at the budget.
@@ -91,6 +99,9 @@ struct Params {
 inline constexpr double kDefaultViscosity = 1.0e4 / 60.0;
 /// The default configuration's largest step in seconds (docs/DECISIONS.md D28).
 inline constexpr double kDefaultMaxStep = 1.0 / (60.0 * 64);
+/// The default configuration's interval between fracture/restoration passes in seconds (D28):
+/// it divides the frame times from 1/30 to 1/240 s, and kDefaultMaxStep divides it.
+inline constexpr double kDefaultAdaptEvery = 1.0 / 240;
 
 /// The paper's configuration (MODEL.md §3): the approximate implicit step (its isotropic
 /// Jacobian, one sweep), one step per 1/60 s frame, fracture and restoration after every step,

@@ -90,15 +90,15 @@ struct RenderBuffers {
 };
 
 /// When a backend runs its fracture/restoration pass (Params::adapt_per_frame): after every
-/// step, or after the step that completes a frame of simulated time. Both backends keep one, so
-/// they pass at the same steps.
+/// step, or after the step that completes Params::adapt_interval() of simulated time (a frame,
+/// or adapt_every). Both backends keep one, so they pass at the same steps.
 class AdaptClock {
  public:
   /// Counts a step of h; true if the pass runs after it.
   bool tick(const Params& p) {
     if (!p.adapt_per_frame) return true;
     elapsed_ += p.h();
-    if (elapsed_ < p.frame_dt * (1 - 1e-6)) return false;  // S steps of frame_dt / S, rounded
+    if (elapsed_ < p.adapt_interval() * (1 - 1e-6)) return false;  // S steps of interval / S, rounded
     elapsed_ = 0;
     return true;
   }

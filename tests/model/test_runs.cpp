@@ -136,6 +136,24 @@ TEST_P(Runs, FrameRateIndependentWithAStepBound) {
   EXPECT_NE(taken[0], 8 * taken[1]);
 }
 
+// The default configuration (D28) is frame-rate independent bit for bit: its step bound (1/3840
+// s) and its pass interval (1/240 s) divide every frame time from 1/30 to 1/240 s, so each rate
+// takes the same steps and runs fracture and restoration after the same ones. Catches the pass
+// tied to the frame again (adapt_every ignored: the 1/30 s frames then pass half as often as
+// the 1/60 s ones, and the crumples differ) and a default without the step bound.
+TEST_P(Runs, DefaultIsFrameRateIndependent) {
+  Params p = default_params();
+  std::vector<Snapshot> ends;
+  for (int rate : {30, 60, 240}) {
+    p.frame_dt = 1.0 / rate;
+    auto sim = make(make_grid(12), p);
+    for (int f = 1; f <= rate / 2; ++f) ASSERT_EQ(run_frame(*sim, p, f).substeps, 3840 / rate);
+    ends.push_back(sim->snapshot());
+  }
+  EXPECT_GT(ends[0].position.size(), 144u);  // it split: the passes ran
+  for (size_t k = 1; k < ends.size(); ++k) EXPECT_TRUE(same(ends[0], ends[k])) << k;
+}
+
 TEST_P(Runs, SameSeedSameResultOtherSeedOther) {
   const Snapshot a = crumple(*this, GetParam(), 7, 1), b = crumple(*this, GetParam(), 7, 1);
   const Snapshot c = crumple(*this, GetParam(), 8, 1);
