@@ -301,7 +301,7 @@ def timing_configs(n):
                                    threads, "--kappa", 1e4] + step_options(S, opts) + opts
 
 
-def stage_timing(_runner, quick, only=None):
+def stage_timing(_runner, quick, only=None, methods=None):
     """Median (over rounds) of each run's mean ms per frame; one process at a time. Fast
     configurations get the size's rounds; reference-only ones one round, after them (they
     cost seconds per frame, and their cost is only indicative: one thread, double)."""
@@ -314,7 +314,7 @@ def stage_timing(_runner, quick, only=None):
                             text=True).stdout.strip()
     result.update({"machine": ac.cpu_model(), "commit": commit, "exe": crumple_stats.EXE})
     for n, rounds in sizes.items():
-        configs = dict(timing_configs(n))
+        configs = {k: v for k, v in timing_configs(n) if not methods or k.split("/")[0] in methods}
         times = {k: [] for k in configs}
         fast = [k for k in configs if "fast" in configs[k]]
         schedule = [rng.sample(fast, len(fast)) for _ in range(rounds)] + [[k for k in configs if k not in fast]]
@@ -327,8 +327,9 @@ def stage_timing(_runner, quick, only=None):
                 print(f"  N={n} round {r + 1}/{len(schedule)} [{i + 1}/{len(order)}] {key}: "
                       + (f"{out['ms_frame_mean']:.2f} ms/frame" if out["exit"] == 0 else f"exit {out['exit']}"),
                       file=sys.stderr, flush=True)
-        result[f"N{n}"] = {k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
-                               "args": [str(a) for a in configs[k]]} for k, v in times.items()}
+        result.setdefault(f"N{n}", {}).update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
+                                                   "args": [str(a) for a in configs[k]], "commit": commit}
+                                               for k, v in times.items()})
         data = load_result()  # saved per size: a long stage keeps what it measured
         data["timing"] = result
         save_result(data)
@@ -464,8 +465,9 @@ def chart_pareto(data, label, path):
     ax.set_xlabel("ms per frame (mean of a 3 s crumple; fast backend 2 threads, reference backend 1)")
     ax.set_ylabel("largest relative error of a seed mean")
     t = data.get("timing", {})
-    ax.set_title(f"crumple {label}: error against the converged crumple, and cost\n{t.get('machine', '?')}, "
-                 f"crumple {t.get('commit', '?')}", fontsize=9)
+    commits = sorted({str(v.get("commit", t.get("commit"))) for v in t.get(label.split("_")[0], {}).values()})
+    ax.set_title(f"crumple {label}: error against the converged crumple (S = {data['pareto'][label]['reference_substeps']}),"
+                 f" and cost\n{t.get('machine', '?')}, crumple {' and '.join(commits)}", fontsize=9)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
@@ -573,6 +575,7 @@ def main(argv=None):
     p.add_argument("--cached-only", action="store_true", help="use only cached runs (converge: stop at the "
                    "last level run in full)")
     p.add_argument("--fast-only", action="store_true", help="pareto: only the methods of the fast backend")
+    p.add_argument("--methods", nargs="*", help="timing: only these methods (the others keep their timings)")
     p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64 ...")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
@@ -585,7 +588,7 @@ def main(argv=None):
         return
     stages = {"converge": lambda: stage_converge(runner, a.quick, a.cases),
               "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only),
-              "timing": lambda: stage_timing(runner, a.quick, a.cases),
+              "timing": lambda: stage_timing(runner, a.quick, a.cases, a.methods),
               "framerate": lambda: stage_framerate(runner, a.quick, a.cases),
               "calibrate": lambda: stage_calibrate(runner, a.quick, a.sizes, a.substeps)}
     result = stages[a.stage]()
