@@ -48,8 +48,8 @@ def crumple_main(a):
     args = {k: row for k, row in data["timing"][label.split("_")[0]].items()}
 
     def describe(p):
-        full = args[p[0]]["args"]  # the timed command line, less its seed
-        opts = [o for i, o in enumerate(full) if o != "--seed" and not (i > 0 and full[i - 1] == "--seed")]
+        full = args[p[0]]["args"]  # the timed command line, less its seed, on the study's --paper base
+        opts = ["--paper"] + [o for i, o in enumerate(full) if o != "--seed" and not (i > 0 and full[i - 1] == "--seed")]
         return {"configuration": p[0], "ms_per_frame": p[3], "error": p[4], "fits_60fps": p[3] <= 1000 / 60,
                 "crumple_options": " ".join(opts)}
 

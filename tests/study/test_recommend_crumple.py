@@ -75,7 +75,8 @@ class Command(unittest.TestCase):
         self.assertEqual(p.returncode, 0, p.stderr)
         out = json.loads(p.stdout)
         self.assertEqual(out["recommendation"]["configuration"], "explicit-F/S32")
-        self.assertEqual(out["recommendation"]["crumple_options"], "--grid 64 --substeps 32")
+        # the study runs every command line from the --paper base (crumple_stats)
+        self.assertEqual(out["recommendation"]["crumple_options"], "--paper --grid 64 --substeps 32")
         self.assertFalse(out["recommendation"]["fits_60fps"])
         self.assertEqual([a["configuration"] for a in out["alternatives"]], ["explicit/S64"])
 
