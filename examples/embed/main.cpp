@@ -1,13 +1,19 @@
 // Embeds crumple in a frame loop: a 64 x 64 sheet lies on a table, a ball rises under it and
-// a hand (a grab spring) drags one corner in and up, for 300 frames at 60 Hz. Prints the frame
-// time every 50 frames and the final counts.
+// a hand (a grab spring) drags one corner in and up, for 300 frames at 60 Hz (or as many as the
+// first argument says). Prints the frame time every 50 frames and the final counts.
 #include <crumple/crumple.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <string>
 
-int main() {
+int main(int argc, char** argv) {
+  const int frames = argc > 1 ? std::atoi(argv[1]) : 300;
+  if (frames < 1 || frames > 100000) {
+    std::fprintf(stderr, "embed: error: the frame count must be a whole number in [1, 100000]\n");
+    return 2;
+  }
   // A 64 x 64 grid, fast backend, run in this thread's oneTBB arena, the default configuration
   // (its substeps chosen each frame: docs/DECISIONS.md D28).
   crumple::SheetDesc desc;
@@ -29,7 +35,7 @@ int main() {
               sheet.live_vertices(), sheet.live_triangles());
   double total_ms = 0;
   long splits = 0, restores = 0, uploads = 0;
-  for (int frame = 1; frame <= 300; ++frame) {
+  for (int frame = 1; frame <= frames; ++frame) {
     hands.spheres[0].center[2] += 0.001;  // the ball rises through the table, 0.3 over the run
     hands.grabs[0].target = {1.0 - 0.0015 * frame, 1.0 - 0.0015 * frame, 0.0003 * frame};
     crumple::FrameEvents ev;
@@ -47,9 +53,9 @@ int main() {
                   static_cast<unsigned long long>(sheet.topology_generation()));
   }
   const float* c = &sheet.positions()[3 * corner];
-  std::printf("300 frames: %.3f ms/frame, %ld splits, %ld restores, %ld index uploads, %d vertices, "
+  std::printf("%d frames: %.3f ms/frame, %ld splits, %ld restores, %ld index uploads, %d vertices, "
               "%d triangles, corner at (%.3f, %.3f, %.3f)\n",
-              total_ms / 300, splits, restores, uploads, sheet.live_vertices(), sheet.live_triangles(), c[0],
+              frames, total_ms / frames, splits, restores, uploads, sheet.live_vertices(), sheet.live_triangles(), c[0],
               c[1], c[2]);
   return 0;
 }
