@@ -245,41 +245,25 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
 }
 
 void register_frame_benchmarks() {
-  for (const std::string& backend : backend_names()) {
-    const bool reference = backend == "reference";
-    for (int threads : {1, 2}) {
-      if (reference && threads != 1) continue;  // the reference is serial
-      for (int n : kSizes) {
-        if (reference && n > kReferenceMaxN) continue;
-        const std::string name =
-            "BM_Frame/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);
-        benchmark::RegisterBenchmark(name.c_str(), BM_Frame, backend, threads, n, Timed::Api, Config::Paper)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-      }
-    }
-  }
+  // BM_Frame (the paper's configuration) and BM_Default (the command's, D28): the same prepared-
+  // state method, one Sheet::step per frame; BM_Steps and BM_Frozen: the paper's as bare steps.
   for_each_config([](const std::string& backend, int threads) {
-    for (int n : kPricedSizes)
-      for (auto [kind, timed] : {std::pair{"Steps", Timed::Steps}, std::pair{"Frozen", Timed::Frozen}})
-        benchmark::RegisterBenchmark(bench_name(kind, backend, threads, n).c_str(), BM_Frame, backend, threads, n, timed, Config::Paper)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-  });
-  // BM_Default/<backend>/<threads>/<N>: the command's default configuration (D28), the same
-  // prepared-state method, one Sheet::step per frame.
-  for (const std::string& backend : backend_names())
-    for (int threads : {1, 2}) {
-      const bool reference = backend == "reference";
-      if (reference && threads != 1) continue;
-      for (int n : kSizes) {
-        if (n > (reference ? kDefaultReferenceMaxN : kDefaultMaxN)) continue;
-        benchmark::RegisterBenchmark(bench_name("Default", backend, threads, n).c_str(), BM_Frame, backend, threads,
-                                     n, Timed::Api, Config::Default)
-            ->Unit(benchmark::kMillisecond)
-            ->UseManualTime();
-      }
+    const bool reference = backend == "reference";
+    auto add = [&](const char* kind, int n, Timed timed, Config config) {
+      benchmark::RegisterBenchmark(bench_name(kind, backend, threads, n).c_str(), BM_Frame, backend, threads, n,
+                                   timed, config)
+          ->Unit(benchmark::kMillisecond)
+          ->UseManualTime();
+    };
+    for (int n : kSizes) {
+      if (n <= (reference ? kReferenceMaxN : n)) add("Frame", n, Timed::Api, Config::Paper);
+      if (n <= (reference ? kDefaultReferenceMaxN : kDefaultMaxN)) add("Default", n, Timed::Api, Config::Default);
     }
+    for (int n : kPricedSizes) {
+      add("Steps", n, Timed::Steps, Config::Paper);
+      add("Frozen", n, Timed::Frozen, Config::Paper);
+    }
+  });
   benchmark::AddCustomContext("crumple_prep_fraction_of_sphere_time", std::to_string(kPrepFraction));
 }
 
