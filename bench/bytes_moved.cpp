@@ -10,7 +10,7 @@ namespace {
 // Element sizes of the layout (topology.h). The asserts make a layout change fail here, where
 // the formulas below must then be revisited, rather than silently miscount.
 constexpr double kF = 4, kI = 4, kU8 = 1, kU16 = 2;  // float, int32 id, flag byte, list count
-constexpr double kF4 = 16, kOut = 64;                // Float4 (g, area), EdgeOut record
+constexpr double kF4 = 16, kOut = 32;                // Float4 (g, area, rows), EdgeOut record
 static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut);
 constexpr double kLine = 64;
 
@@ -27,16 +27,20 @@ double normals(const LayoutSizes& s) {
   return areas + sums;
 }
 
-// Per edge slot a, b, wl, wr, l0, flags in and the 64-byte EdgeOut out; per vertex (endpoints
-// and wings, each once) m, x, v, n.
+// pack_rows: per vertex x, v, m, n in and the rows xm, vm, nr out. Then per edge slot a, b, wl,
+// wr, l0, flags in and the 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its
+// three rows.
 double edge_forces(const LayoutSizes& s) {
-  return s.edges * (4 * kI + kF + kU8 + kOut) + s.vertices * (kF + 9 * kF);
+  const double pack = s.vertices * (10 * kF + 3 * kF4);
+  return pack + s.edges * (4 * kI + kF + kU8 + kOut) + s.vertices * 3 * kF4;
 }
 
-// Per vertex its spring and wing rows and both counts, m, n, v in, f, ksum and g out; every
-// EdgeOut record once.
+// Per vertex its spring, neighbour and wing rows and both counts, its velocity row and n in, f,
+// ksum and g out; every EdgeOut record once, every neighbour's velocity row once (the vertex's
+// own among them).
 double gather(const LayoutSizes& s) {
-  const double per_vertex = list_row(s.room_e) + list_row(s.room_t) + 2 * kU16 + (kF + 6 * kF) + 4 * kF + kF4;
+  const double lists = list_row(s.room_e) + kI * s.room_e + list_row(s.room_t) + 2 * kU16;
+  const double per_vertex = lists + kF4 + 3 * kF + 4 * kF + kF4;
   return s.vertices * per_vertex + s.edges * kOut;
 }
 

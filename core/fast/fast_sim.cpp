@@ -100,11 +100,16 @@ void FastSimulator::compute_normals() {
   par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, b, e); });
 }
 
+void FastSimulator::edge_pass(const StepConstants& c) {
+  par_.run_lanes(topo_.V.size(), kGrain, [&](int b, int e) { pack_rows(topo_, b, e); });
+  par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); });
+}
+
 void FastSimulator::compute_forces() {
   const StepConstants c = step_constants();
   {
     PassTimer t(pass_seconds_, int(Pass::EdgeForces));
-    par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); });
+    edge_pass(c);
   }
   PassTimer t(pass_seconds_, int(Pass::Gather));
   par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); });
@@ -189,7 +194,7 @@ void FastSimulator::run_pass(Pass p) {
   const StepConstants c = step_constants();
   switch (p) {
     case Pass::Normals: compute_normals(); break;
-    case Pass::EdgeForces: par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); }); break;
+    case Pass::EdgeForces: edge_pass(c); break;
     case Pass::Gather: par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); }); break;
     case Pass::Integrate: integrate(); break;
     case Pass::AdaptTest: adapt_decide(); break;

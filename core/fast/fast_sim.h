@@ -2,15 +2,19 @@
 // range kernel (kernels.h) run on the backend's TBB arena.
 //
 // Design note (the whole pipeline of one step; cf. Box2D's solver.h):
-//   forces     triangle_areas -> vertex_normals -> edge_forces -> gather_forces   (4 passes)
+//   forces     triangle_areas -> vertex_normals -> pack_rows + edge_forces -> gather_forces
 //              Springs, bending and predictor are computed per element and gathered per
 //              vertex over its adjacency lists: no scatter, no atomics, one summation order.
-//              The gather sums whole 64-byte records as wide rows (wide.h), the first 8
-//              entries of a list in a loop of fixed length (no exit mispredicted per list).
-//              kappa_e = kappa (m_a + m_b) is added from the masses in the edge pass (D15).
-//              Springs are evaluated once per edge, not once from each side: a second set of
-//              square roots would cost more than the per-edge output does. What was measured
-//              and not kept for this pass is in docs/PERFORMANCE.md.
+//              pack_rows copies position, velocity, mass and normal into 16-byte rows, and the
+//              edge pass reads each of an edge's four vertices as rows, eight edges in AVX lanes
+//              (lanes8.h). It stores per edge only what the gather cannot compute from the
+//              endpoints' rows (force and bending, 32 bytes); the gather sums those records as
+//              wide rows (wide.h), the first 8 entries of a list in a loop of fixed length (no
+//              exit mispredicted per list), and the implicit blocks W_e, kappa_e = kappa
+//              (m_a + m_b) (D15), from the neighbours' velocity rows. Springs are evaluated once
+//              per edge, not once from each side: a second set of square roots would cost more
+//              than the per-edge output does. What was measured and not kept for this pass is in
+//              docs/PERFORMANCE.md.
 //   integrate  K x jacobi_sweep (double-buffered guesses, each neighbour's mass in w, so a
 //              sweep reads one 16-byte value per neighbour and nothing per edge) ->
 //              momentum_drift (fixed-block reduction) -> advance (new v and x, sphere
@@ -100,6 +104,7 @@ class FastSimulator final : public Simulator {
   StepConstants step_constants() const;
   void compute_normals();
   void compute_forces();
+  void edge_pass(const StepConstants& c);  ///< pack_rows, then edge_forces (both one pass's time)
   void integrate();
   StepEvents adapt();
   void adapt_decide();     ///< normals on the current state and adapt_test into decisions_

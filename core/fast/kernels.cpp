@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fast/lanes8.h"
 #include "fast/wide.h"
 #include "model/random.h"
 
@@ -19,9 +20,9 @@ namespace crumple::fast {
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
 // whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
 // CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel whose loads are random gathers (of
-// positions and normals: the edge and triangle passes): scalar, because Zen 4 executes vector
-// gathers slower than the scalar loads they replace, and GCC scatters the 64-byte records with
-// single-float stores (docs/PERFORMANCE.md).
+// positions: the triangle pass, and the edge pass's fallback): scalar, because Zen 4 executes
+// vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
+// itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
                          const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
@@ -62,7 +63,7 @@ void for_list(const std::int32_t* list, int n, F f) {
   for (int k = kFixed; k < n; ++k) f(list[k], true);
 }
 
-// The 64-byte records the gather reads are scattered, and a vertex's loads are few, so the
+// The 32-byte records the gather reads are scattered, and a vertex's loads are few, so the
 // gather fetches the first kFixed records of the vertex kAhead places on while it sums this one
 // (entries past a list's count fetch the zero record). The Jacobi sweep and the normals do not:
 // their 16-byte records mostly hit the cache, and prefetching them made those passes slower
@@ -94,85 +95,176 @@ void vertex_normals(Topology& m, int begin, int end) {
 }
 
 namespace {
-CRUMPLE_SCALAR_KERNEL void edge_forces_body(const StepConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
-                      const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                      const float* __restrict l0, const std::uint8_t* __restrict flags, const float* __restrict m,
-                      const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                      const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
-                      const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
-                      EdgeOut* __restrict out, int begin, int end) {
-  const float quarter = c.balanced ? 0.25f : 0.0f;
-  for (int e = begin; e < end; ++e) {
-    const int a = A[e], b = B[e];
-    const float dx = x[a] - x[b], dy = y[a] - y[b], dz = z[a] - z[b];
-    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const float inv = lt > 0 ? 1.0f / lt : 0.0f;
-    const float msum = m[a] + m[b];  // of the masses now: no per-edge copy to keep current
-    // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
-    const float dvx = vx[b] - vx[a], dvy = vy[b] - vy[a], dvz = vz[b] - vz[a];
-    const float rel = -(dvx * dx + dvy * dy + dvz * dz) * inv;
-    const float s = (-c.kappa * (lt - l0[e]) - c.damping * rel) * msum * inv;
-    const float kap = c.implicit * msum;  // W_e = h^2 kappa_e + h c_e (D17)
-    // Bending [Eq 8-9] for mesh edges with two wings: k = s C_beta B, B = (1 - n_rl)|e|/2.
-    const bool hinge = (flags[e] & kMesh) && WL[e] >= 0 && WR[e] >= 0;
-    const int l = hinge ? WL[e] : a, r = hinge ? WR[e] : a;
-    const float nrl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];
-    const float Bmag = (1.0f - nrl) * lt * 0.5f;
-    const float gx = (x[r] + nx[r]) - (x[l] + nx[l]), gy = (y[r] + ny[r]) - (y[l] + ny[l]),
-                gz = (z[r] + nz[r]) - (z[l] + nz[l]);
-    const float ox = x[r] - x[l], oy = y[r] - y[l], oz = z[r] - z[l];
-    const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
-    const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
-    const float k = hinge ? sign * c.bend * msum * Bmag : 0.0f;
-    // Mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l (removed in the balanced form).
-    out[e] = EdgeOut{s * dx, s * dy, s * dz, kap, kap * dvx, kap * dvy, kap * dvz, k,
-                     quarter * k * (nx[r] + nx[l] - nx[a] - nx[b]), quarter * k * (ny[r] + ny[l] - ny[a] - ny[b]),
-                     quarter * k * (nz[r] + nz[l] - nz[a] - nz[b]), {0, 0, 0, 0, 0}};
+void pack_rows_body(const float* __restrict x, const float* __restrict y, const float* __restrict z,
+                    const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
+                    const float* __restrict m, const float* __restrict nx, const float* __restrict ny,
+                    const float* __restrict nz, Float4* __restrict xm, Float4* __restrict vm, Float4* __restrict nr,
+                    int begin, int end) {
+  CRUMPLE_SIMD_LOOP
+  for (int v = begin; v < end; ++v) {
+    xm[v] = Float4{x[v], y[v], z[v], m[v]};
+    vm[v] = Float4{vx[v], vy[v], vz[v], m[v]};
+    nr[v] = Float4{nx[v], ny[v], nz[v], 0.0f};
   }
 }
 }  // namespace
 
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  edge_forces_body(c, m.E.a.data(), m.E.b.data(), m.E.wl.data(), m.E.wr.data(), m.E.l0.data(), m.E.flags.data(),
-                   m.V.m.data(), m.V.x.data(), m.V.y.data(), m.V.z.data(), m.V.vx.data(), m.V.vy.data(),
-                   m.V.vz.data(), m.V.nx.data(), m.V.ny.data(), m.V.nz.data(), m.E.out.data(), begin, end);
+void pack_rows(Topology& m, int begin, int end) {
+  Vertices& V = m.V;
+  pack_rows_body(V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), V.m.data(), V.nx.data(),
+                 V.ny.data(), V.nz.data(), V.xm.data(), V.vm.data(), V.nr.data(), begin, end);
 }
 
 namespace {
-// The gather sums whole EdgeOut records as rows of 16 floats, each scaled lane by lane by the
-// role the vertex plays: a row of (f, W_e, j, -kb, mean) for endpoint a, the force and j
-// negated for endpoint b (b receives the opposite of a), and only (kb, mean) as a wing. Scaling
-// by 1, -1 or 0 is exact, so each lane sums exactly what the per-field sums did.
-using Row = Wide<16>;
+/// An edge's four vertices as the edge pass reads them: the endpoints a, b and, for a hinge (a
+/// mesh edge with two wings), the wings l, r; elsewhere l = r = a and `hinge` is 0.
+struct Stencil {
+  int a, b, l, r;
+  float hinge;
+};
+inline Stencil stencil(const Edges& E, int e) {
+  const bool hinge = (E.flags[e] & kMesh) && E.wl[e] >= 0 && E.wr[e] >= 0;
+  return {E.a[e], E.b[e], hinge ? E.wl[e] : E.a[e], hinge ? E.wr[e] : E.a[e], hinge ? 1.0f : 0.0f};
+}
+
+#if CRUMPLE_LANES8
+// The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
+// range's last edge in the lanes past it and stores only its own lanes.
+void edge_forces_body(const Topology& m, const StepConstants& c, int begin, int end) {
+  using namespace lanes8;
+  const Vertices& V = m.V;
+  EdgeOut* out = const_cast<EdgeOut*>(m.E.out.data());
+  const __m256 kappa = _mm256_set1_ps(c.kappa), damping = _mm256_set1_ps(c.damping), bend = _mm256_set1_ps(c.bend);
+  const __m256 quarter = _mm256_set1_ps(c.balanced ? 0.25f : 0.0f), half = _mm256_set1_ps(0.5f);
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  alignas(32) EdgeOut spare[8];  // where lanes past the range store
+  for (int e0 = begin; e0 < end; e0 += 8) {
+    int a[8], b[8], l[8], r[8];
+    alignas(32) float hinge[8], rest[8];
+    float* dst[8];
+    for (int k = 0; k < 8; ++k) {
+      const int e = std::min(e0 + k, end - 1);
+      const Stencil q = stencil(m.E, e);
+      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = m.E.l0[e];
+      dst[k] = e0 + k < end ? &out[e0 + k].fx : &spare[k].fx;
+    }
+    __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
+    load_rows(V.xm.data(), a, xa, ya, za, ma);
+    load_rows(V.xm.data(), b, xb, yb, zb, mb);
+    load_rows(V.vm.data(), a, vxa, vya, vza, unused);
+    load_rows(V.vm.data(), b, vxb, vyb, vzb, unused);
+    // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
+    const __m256 dx = xa - xb, dy = ya - yb, dz = za - zb;
+    const __m256 lt = _mm256_sqrt_ps(dx * dx + dy * dy + dz * dz);
+    const __m256 inv = _mm256_and_ps(_mm256_cmp_ps(lt, zero, _CMP_GT_OQ), one / lt);
+    const __m256 msum = ma + mb;
+    const __m256 rel = -((vxb - vxa) * dx + (vyb - vya) * dy + (vzb - vza) * dz) * inv;
+    const __m256 s = (-kappa * (lt - _mm256_load_ps(rest)) - damping * rel) * msum * inv;
+    // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
+    __m256 nxa, nya, nza, nxb, nyb, nzb, nxl, nyl, nzl, nxr, nyr, nzr, xl, yl, zl, xr, yr, zr;
+    load_rows(V.nr.data(), a, nxa, nya, nza, unused);
+    load_rows(V.nr.data(), b, nxb, nyb, nzb, unused);
+    load_rows(V.nr.data(), l, nxl, nyl, nzl, unused);
+    load_rows(V.nr.data(), r, nxr, nyr, nzr, unused);
+    load_rows(V.xm.data(), l, xl, yl, zl, unused);
+    load_rows(V.xm.data(), r, xr, yr, zr, unused);
+    const __m256 nrl = nxr * nxl + nyr * nyl + nzr * nzl;
+    const __m256 Bmag = (one - nrl) * lt * half;
+    const __m256 gx = (xr + nxr) - (xl + nxl), gy = (yr + nyr) - (yl + nyl), gz = (zr + nzr) - (zl + nzl);
+    const __m256 ox = xr - xl, oy = yr - yl, oz = zr - zl;
+    const __m256 gap = _mm256_sqrt_ps(gx * gx + gy * gy + gz * gz) - _mm256_sqrt_ps(ox * ox + oy * oy + oz * oz);
+    const __m256 k = _mm256_load_ps(hinge) * (sign(gap) * bend * msum * Bmag);
+    const __m256 qk = quarter * k;  // mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l
+    store_rows(dst, s * dx, s * dy, s * dz, k);
+    float* const mean[8] = {dst[0] + 4, dst[1] + 4, dst[2] + 4, dst[3] + 4, dst[4] + 4, dst[5] + 4, dst[6] + 4, dst[7] + 4};
+    store_rows(mean, qk * (nxr + nxl - nxa - nxb), qk * (nyr + nyl - nya - nyb), qk * (nzr + nzl - nza - nzb), zero);
+  }
+}
+#else
+// The same pass one edge at a time (a target without AVX2, or the no-SIMD build).
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstants& c, int begin, int end) {
+  const Vertices& V = m.V;
+  EdgeOut* out = const_cast<EdgeOut*>(m.E.out.data());
+  const float quarter = c.balanced ? 0.25f : 0.0f;
+  for (int e = begin; e < end; ++e) {
+    const Stencil q = stencil(m.E, e);
+    const Float4 pa = V.xm[q.a], pb = V.xm[q.b], va = V.vm[q.a], vb = V.vm[q.b];
+    const Float4 na = V.nr[q.a], nb = V.nr[q.b], nl = V.nr[q.l], nr = V.nr[q.r], pl = V.xm[q.l], pr = V.xm[q.r];
+    // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
+    const float dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
+    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const float inv = lt > 0 ? 1.0f / lt : 0.0f;
+    const float msum = pa.w + pb.w;
+    const float rel = -((vb.x - va.x) * dx + (vb.y - va.y) * dy + (vb.z - va.z) * dz) * inv;
+    const float s = (-c.kappa * (lt - m.E.l0[e]) - c.damping * rel) * msum * inv;
+    // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
+    const float nrl = nr.x * nl.x + nr.y * nl.y + nr.z * nl.z;
+    const float Bmag = (1.0f - nrl) * lt * 0.5f;
+    const float gx = (pr.x + nr.x) - (pl.x + nl.x), gy = (pr.y + nr.y) - (pl.y + nl.y), gz = (pr.z + nr.z) - (pl.z + nl.z);
+    const float ox = pr.x - pl.x, oy = pr.y - pl.y, oz = pr.z - pl.z;
+    const float gap = std::sqrt(gx * gx + gy * gy + gz * gz) - std::sqrt(ox * ox + oy * oy + oz * oz);
+    const float sign = gap > 0 ? 1.0f : (gap < 0 ? -1.0f : 0.0f);
+    const float k = q.hinge * (sign * c.bend * msum * Bmag);
+    const float qk = quarter * k;  // mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l
+    out[e] = EdgeOut{s * dx, s * dy, s * dz, k, qk * (nr.x + nl.x - na.x - nb.x), qk * (nr.y + nl.y - na.y - nb.y),
+                     qk * (nr.z + nl.z - na.z - nb.z), 0.0f};
+  }
+}
+#endif
+}  // namespace
+
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end) { edge_forces_body(m, c, begin, end); }
+
+namespace {
+// The gather sums whole EdgeOut records as rows of 8 floats, each scaled lane by lane by the
+// role the vertex plays: (f, -kb, mean) for endpoint a, the force negated for endpoint b (b
+// receives the opposite of a), and only (kb, mean) as a wing. Scaling by 1, -1 or 0 is exact,
+// so each lane sums exactly what per-field sums would.
+using Row = Wide<8>;
 static_assert(sizeof(EdgeOut) == sizeof(Row));
 const Row kAsEndpoint[2] = {
-    Row{{1, 1, 1, 1, 1, 1, 1, -1, 1, 1, 1, 0, 0, 0, 0, 0}},      // v is a
-    Row{{-1, -1, -1, 1, -1, -1, -1, -1, 1, 1, 1, 0, 0, 0, 0, 0}}, // v is b
+    Row{{1, 1, 1, -1, 1, 1, 1, 0}},     // v is a
+    Row{{-1, -1, -1, -1, 1, 1, 1, 0}},  // v is b
 };
-const Row kAsWing{{0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 0, 0, 0, 0, 0}};
+const Row kAsWing{{0, 0, 0, 1, 1, 1, 1, 0}};
 }  // namespace
 
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
   Vertices& V = m.V;
   const EdgeOut* __restrict out = m.E.out.data();
+  const Float4* __restrict vm = V.vm.data();
   for (int v = begin; v < end; ++v) {
     if (v + kAhead < end) {
       const int a = v + kAhead;
       prefetch_list(out, &V.springs[V.at_e[a]], V.n_springs[a], 1);
       prefetch_list(out, &V.wings[V.at_t[a]], V.n_tris[a], 0);
     }
+    // Per spring, its record and the implicit block W_e = w (m_v + m_o) I [Eq 5, D17] with
+    // W_e (v_o - v) from the rows of v and of the neighbour o (nothing per edge to store for
+    // them): the springs list and its parallel neighbours list in one loop, in list order.
+    const Row4 self = Row4::load(&vm[v]);
+    const float mass = self[3];
     Row sum = Row::zero();
+    Row4 j = Row4::zero();
+    float ks = 0;
     const std::int32_t* springs = &V.springs[V.at_e[v]];
+    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     const int ns = V.n_springs[v], nt = V.n_tris[v];
-    for_list(springs, ns, [&](int x, bool in) {
+    auto spring = [&](int k, bool in) {
+      const int x = springs[k];
       sum += Row::load(in ? &out[x >> 1] : &kZeroRow) * kAsEndpoint[x & 1];
-    });
+      const Row4 other = Row4::load(in ? &vm[nbrs[k]] : &vm[v]);
+      const float w = in ? c.implicit * (mass + other[3]) : 0.0f;
+      ks += w;
+      j += w * (other - self);
+    };
+    for (int k = 0; k < kFixed; ++k) spring(k, k < ns);
+    for (int k = kFixed; k < ns; ++k) spring(k, true);
     const std::int32_t* wings = &V.wings[V.at_t[v]];  // v is a wing of the edge opposite it
     for_list(wings, nt, [&](int x, bool in) { sum += Row::load(in ? &out[x] : &kZeroRow) * kAsWing; });
     float fx = sum[0], fy = sum[1], fz = sum[2];
-    const float ks = sum[3], jx = sum[4], jy = sum[5], jz = sum[6];  // jx: sum of W_e (v_other - v_v)
-    const float kn = sum[7], mx = sum[8], my = sum[9], mz = sum[10];  // f = -k n_v (hinge), +k n_v (wing), - mean
-    const float mass = V.m[v];
+    const float kn = sum[3], mx = sum[4], my = sum[5], mz = sum[6];  // f = -k n_v (hinge), +k n_v (wing), - mean
+    const float jx = j[0], jy = j[1], jz = j[2];                     // sum of W_e (v_other - v_v)
     fx += kn * V.nx[v] - mx;
     fy += kn * V.ny[v] - my;
     fz += kn * V.nz[v] - mz - mass * c.gravity;
@@ -184,11 +276,11 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
       const float inv = 1.0f / (mass + 2.0f * ks + dead);
-      V.g[v] = Float4{V.vx[v] + (c.h * fx + jx) * inv, V.vy[v] + (c.h * fy + jy) * inv,
-                      V.vz[v] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + jz) * inv, mass};
+      V.g[v] = Float4{self[0] + (c.h * fx + jx) * inv, self[1] + (c.h * fy + jy) * inv,
+                      self[2] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + jz) * inv, mass};
     } else {
       const float inv = c.h / (mass + dead);
-      V.g[v] = Float4{V.vx[v] + fx * inv, V.vy[v] + fy * inv, V.vz[v] + fz * inv, mass};
+      V.g[v] = Float4{self[0] + fx * inv, self[1] + fy * inv, self[2] + fz * inv, mass};
     }
   }
 }

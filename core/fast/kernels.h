@@ -31,12 +31,13 @@ struct StepConstants {
 void triangle_areas(Topology& m, float unit, int begin, int end);
 /// n_v = normalized sum of the area vectors of v's triangles.                         §1
 void vertex_normals(Topology& m, int begin, int end);
-/// Per edge: the spring force on endpoint a (Hookean with kappa_e [Eq 5], damping), the implicit
-/// block W_e and W_e (v_b - v_a), and the bending magnitude s C_beta B and balanced mean of its
-/// stencil [Eq 8-9].
+/// Packs the per-step rows xm, vm, nr (topology.h) from position, velocity, mass and normal.
+void pack_rows(Topology& m, int begin, int end);
+/// Per edge, from the packed rows: the spring force on endpoint a (Hookean with kappa_e [Eq 5],
+/// damping), and the bending magnitude s C_beta B and balanced mean of its stencil [Eq 8-9].
 void edge_forces(Topology& m, const StepConstants& c, int begin, int end);
-/// Per vertex: gathers f_v, sum W_e, and writes the first Jacobi guess (the predictor, §3)
-/// with m_v in w.
+/// Per vertex: gathers f_v, sum W_e and sum W_e (v_o - v_v) over its springs (the blocks from the
+/// neighbours' rows), and writes the first Jacobi guess (the predictor, §3) with m_v in w.
 void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
 /// One Jacobi sweep of the implicit velocity step (approx, viscosity): reads g, writes g_next. §3
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);

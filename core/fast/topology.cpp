@@ -35,8 +35,8 @@ void reserve_all(std::size_t n, A&... arrays) {
 }  // namespace
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
-  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next,
-              V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
+  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.xm,
+              V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
@@ -94,8 +94,8 @@ std::int32_t append_block(Array<std::int32_t>& list, Array<std::int32_t>& parall
 
 void Topology::fit() {
   if (const std::size_t n = V.lid.size(), old = V.m.size(); n != old) {
-    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.rx,
-         V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
+    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.xm, V.vm,
+         V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
     // One block of the least room per new slot, in slot order.
     const std::int32_t at_e = append_block(V.springs, V.nbrs, (n - old) * kMinRoom);
     const std::int32_t at_t = append_block(V.tris, V.wings, (n - old) * kMinRoom);

@@ -73,16 +73,15 @@ struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
 };
 
-/// What the edge pass leaves for the vertex gather, packed so that one spring costs one cache
-/// line in the gather (the gather reads these at random, the edge pass writes them in order).
-/// 64 bytes: GCC vectorizes the edge pass's interleaved stores for 16 floats (not for 12).
-struct alignas(64) EdgeOut {
+/// What the edge pass leaves for the vertex gather: what the gather cannot compute from the two
+/// endpoints' rows (their velocities and masses give the implicit block W_e and W_e (v_b - v_a),
+/// so those are not stored). 32 bytes, two records to a cache line: the edge pass writes them in
+/// order with whole 16-byte stores, the gather reads them at random.
+struct alignas(32) EdgeOut {
   float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
-  float kap = 0;                 ///< W_e per unit I: h^2 kappa_e [Eq 5] + h c_e (D17)
-  float jx = 0, jy = 0, jz = 0;  ///< W_e (v_b - v_a)
   float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
   float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
-  float pad[5] = {};             ///< to 64 bytes
+  float pad = 0;                 ///< to 32 bytes
 };
 
 struct Vertices {
@@ -96,6 +95,12 @@ struct Vertices {
   Array<Float4> g;           ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
                              ///< what a sweep gathers from each neighbour, in one load
   Array<Float4> g_next;      ///< the next sweep's guess (double buffer)
+  // per-step rows, packed from the arrays above by pack_rows (kernels.h) before the edge pass,
+  // so that a random neighbour costs one 16-byte load per quantity, not one line per array.
+  // Never read before that pass has rebuilt them, so edits and relayout need not keep them.
+  Array<Float4> xm;          ///< (x, y, z, m)
+  Array<Float4> vm;          ///< (vx, vy, vz, m)
+  Array<Float4> nr;          ///< (nx, ny, nz, 0)
   // cold
   Array<float> rx, ry, rz;   ///< rest position X_k
   // adjacency (see the file comment): two pools of blocks, each with a parallel pool

@@ -1,7 +1,7 @@
 // The fast kernels' one wide-float type (the idea of Box2D v3's b2FloatW): a row of N floats
 // with element-wise arithmetic, for kernels that sum whole records (an EdgeOut is one row of
-// 16, a Float4 one row of 4) instead of one field at a time. The SIMD build maps it onto GCC's
-// vector extensions (a row of 16 is one AVX-512 register on this machine; GCC splits it on
+// 8, a Float4 one row of 4) instead of one field at a time. The SIMD build maps it onto GCC's
+// vector extensions (a row of 8 is one AVX register, a row of 16 one AVX-512 register on this machine; GCC splits it on
 // narrower targets); CRUMPLE_DISABLE_SIMD maps it onto a plain array with scalar loops, so the
 // same kernel source measures the SIMD gain. Element-wise: lane k of a sum adds in the order
 // the kernel adds, so a row sum rounds exactly as the per-field scalar sums it replaces.
@@ -27,6 +27,10 @@ struct Wide {
     for (int k = 0; k < N; ++k) v[k] += b.v[k];
     return *this;
   }
+  friend Wide operator-(Wide a, const Wide& b) {
+    for (int k = 0; k < N; ++k) a.v[k] -= b.v[k];
+    return a;
+  }
   friend Wide operator*(Wide a, const Wide& b) {
     for (int k = 0; k < N; ++k) a.v[k] *= b.v[k];
     return a;
@@ -39,6 +43,7 @@ struct Wide {
 #else
 template <int N> struct VectorOf;  // GCC's vector type of N floats (a dependent size is ignored)
 template <> struct VectorOf<4> { typedef float type __attribute__((vector_size(16))); };
+template <> struct VectorOf<8> { typedef float type __attribute__((vector_size(32))); };
 template <> struct VectorOf<16> { typedef float type __attribute__((vector_size(64))); };
 
 template <int N>
@@ -57,6 +62,7 @@ struct Wide {
     v += b.v;
     return *this;
   }
+  friend Wide operator-(Wide a, const Wide& b) { return Wide{a.v - b.v}; }
   friend Wide operator*(Wide a, const Wide& b) { return Wide{a.v * b.v}; }
   friend Wide operator*(float s, Wide a) { return Wide{a.v * s}; }
 };

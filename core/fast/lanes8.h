@@ -1,0 +1,52 @@
+// Eight edges in the eight lanes of an AVX register: the edge pass reads each edge's vertices as
+// 16-byte rows (topology.h's per-step rows) and transposes them into one register per component,
+// so that its square roots, divisions and products serve eight edges per instruction without
+// the vector gathers that Zen 4 executes slower than the scalar loads they replace
+// (docs/PERFORMANCE.md). Every lane runs the same instructions, so an edge's result does not
+// depend on which lane or which chunk of the range it fell in: the pass gives the same bits on
+// any thread count.
+#pragma once
+
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+#define CRUMPLE_LANES8 1
+#include <immintrin.h>
+
+#include "fast/topology.h"
+
+namespace crumple::fast::lanes8 {
+
+/// Rows rows[id[0..7]] -> one register per component: x, y, z, w of the eight rows.
+inline void load_rows(const Float4* rows, const int id[8], __m256& x, __m256& y, __m256& z, __m256& w) {
+  auto pair = [&](int lo, int hi) {
+    const __m128 a = _mm_loadu_ps(&rows[id[lo]].x), b = _mm_loadu_ps(&rows[id[hi]].x);
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(a), b, 1);
+  };
+  const __m256 r04 = pair(0, 4), r15 = pair(1, 5), r26 = pair(2, 6), r37 = pair(3, 7);
+  const __m256 t0 = _mm256_unpacklo_ps(r04, r15), t1 = _mm256_unpackhi_ps(r04, r15);
+  const __m256 t2 = _mm256_unpacklo_ps(r26, r37), t3 = _mm256_unpackhi_ps(r26, r37);
+  x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
+  y = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2));
+  z = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0));
+  w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
+}
+
+/// The inverse: lane k of (a, b, c, d) -> the four floats at dst[k] (16-byte aligned).
+inline void store_rows(float* const dst[8], __m256 a, __m256 b, __m256 c, __m256 d) {
+  const __m256 t0 = _mm256_unpacklo_ps(a, b), t1 = _mm256_unpackhi_ps(a, b);
+  const __m256 t2 = _mm256_unpacklo_ps(c, d), t3 = _mm256_unpackhi_ps(c, d);
+  const __m256 r[4] = {_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2)),
+                       _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2))};
+  for (int k = 0; k < 4; ++k) {  // r[k] holds lanes k and k + 4
+    _mm_store_ps(dst[k], _mm256_castps256_ps128(r[k]));
+    _mm_store_ps(dst[k + 4], _mm256_extractf128_ps(r[k], 1));
+  }
+}
+
+/// 1 where a > 0, -1 where a < 0, else 0 (NaN: 0), as the scalar pass's sign.
+inline __m256 sign(__m256 a) {
+  const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+  return _mm256_and_ps(_mm256_cmp_ps(a, zero, _CMP_GT_OQ), one) - _mm256_and_ps(_mm256_cmp_ps(a, zero, _CMP_LT_OQ), one);
+}
+
+}  // namespace crumple::fast::lanes8
+#endif
