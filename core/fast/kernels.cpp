@@ -130,10 +130,9 @@ inline Stencil stencil(const Edges& E, int e) {
 #if CRUMPLE_LANES8
 // The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
 // range's last edge in the lanes past it and stores only its own lanes.
-void edge_forces_body(const Topology& m, const StepConstants& c, int begin, int end) {
+void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __restrict out, int begin, int end) {
   using namespace lanes8;
   const Vertices& V = m.V;
-  EdgeOut* out = const_cast<EdgeOut*>(m.E.out.data());
   const __m256 kappa = _mm256_set1_ps(c.kappa), damping = _mm256_set1_ps(c.damping), bend = _mm256_set1_ps(c.bend);
   const __m256 quarter = _mm256_set1_ps(c.balanced ? 0.25f : 0.0f), half = _mm256_set1_ps(0.5f);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -182,9 +181,9 @@ void edge_forces_body(const Topology& m, const StepConstants& c, int begin, int 
 }
 #else
 // The same pass one edge at a time (a target without AVX2, or the no-SIMD build).
-CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstants& c, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __restrict out,
+                                            int begin, int end) {
   const Vertices& V = m.V;
-  EdgeOut* out = const_cast<EdgeOut*>(m.E.out.data());
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
     const Stencil q = stencil(m.E, e);
@@ -213,7 +212,9 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstan
 #endif
 }  // namespace
 
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end) { edge_forces_body(m, c, begin, end); }
+void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
+  edge_forces_body(m, c, m.E.out.data(), begin, end);
+}
 
 namespace {
 // The gather sums whole EdgeOut records as rows of 8 floats, each scaled lane by lane by the
