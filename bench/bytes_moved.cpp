@@ -45,14 +45,13 @@ double gather(const LayoutSizes& s) {
 }
 
 // Per sweep and vertex: its neighbour row and count, m, ksum, v, f in, each neighbour's guess g
-// once (the vertex's own g among them), g_next out. Then momentum_drift (m, g, v, f in), the
-// total mass (m in) and advance (m, g, x, v in; x, v out).
+// once (the vertex's own g among them), g_next out. Then momentum_drift with the total mass
+// (m, g, v, f in) and advance (m, g, x, v in; x, v out).
 double integrate(const LayoutSizes& s, int sweeps) {
   const double sweep = s.vertices * (list_row(s.room_e) + kU16 + 2 * kF + 6 * kF + kF4 + kF4);
   const double drift = s.vertices * (kF + kF4 + 6 * kF);
-  const double mass = s.vertices * kF;
   const double advance = s.vertices * (kF + kF4 + 6 * kF + 6 * kF);
-  return sweeps * sweep + drift + mass + advance;
+  return sweeps * sweep + drift + advance;
 }
 
 // The normals on the new positions, then per edge slot a, b, wl, wr, l0, flags, record, lid in

@@ -134,11 +134,9 @@ void FastSimulator::integrate() {
       pin();
     }
     // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
-    double drift[3];
-    par_.sum3(n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_, c, b, e, out); }, drift);
-    double mass = 0;
-    for (int v = 0; v < n; ++v) mass += topo_.V.m[v];
-    for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / mass) : 0.0f;
+    double drift[4];  // momentum in 0..2, the total mass in 3
+    par_.sum<4>(n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_, c, b, e, out); }, drift);
+    for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
   }
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;

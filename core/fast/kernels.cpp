@@ -318,17 +318,19 @@ void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end) 
   }
 }
 
-void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[3]) {
+void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[4]) {
   const Vertices& V = m.V;
-  double sx = 0, sy = 0, sz = 0;
+  double sx = 0, sy = 0, sz = 0, mass = 0;
   for (int v = begin; v < end; ++v) {
     sx += double(V.m[v]) * (double(V.g[v].x) - V.vx[v]) - double(c.h) * V.fx[v];
     sy += double(V.m[v]) * (double(V.g[v].y) - V.vy[v]) - double(c.h) * V.fy[v];
     sz += double(V.m[v]) * (double(V.g[v].z) - V.vz[v]) - double(c.h) * V.fz[v];
+    mass += V.m[v];
   }
   out[0] = sx;
   out[1] = sy;
   out[2] = sz;
+  out[3] = mass;
 }
 
 namespace {

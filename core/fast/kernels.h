@@ -43,8 +43,9 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
 void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);
 /// Symplectic Euler's new velocity into g: v + h f / m.                               §3
 void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end);
-/// Sum over [begin, end) of m (g - v) - h f (the momentum a finite sweep count adds), in double.
-void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[3]);
+/// Sums over [begin, end) of m (g - v) - h f (the momentum a finite sweep count adds) into
+/// out[0..2] and of m into out[3], in double.
+void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[4]);
 /// v = g - correction, x += h v, then the sphere constraint (radius <= 0: none).       §3, §8
 void advance(Topology& m, const StepConstants& c, const float correction[3], const float center[3],
              float radius, int begin, int end);

@@ -86,17 +86,17 @@ class Parallel {
     run(blocks, std::max(1, grain / kLanes), [&](int b0, int b1) { kernel(b0 * kLanes, std::min(n, b1 * kLanes)); });
   }
 
-  /// Sums partial(begin, end, out[3]) over fixed blocks of `block` items, in block order.
-  template <class Partial>
-  void sum3(int n, int block, const Partial& partial, double out[3]) const {
+  /// Sums partial(begin, end, out[K]) over fixed blocks of `block` items, in block order.
+  template <int K, class Partial>
+  void sum(int n, int block, const Partial& partial, double out[K]) const {
     const int blocks = (n + block - 1) / block;
-    std::vector<double> parts(3 * std::size_t(blocks), 0.0);
+    std::vector<double> parts(K * std::size_t(blocks), 0.0);
     run(blocks, kBlockGrain, [&](int b0, int b1) {
-      for (int b = b0; b < b1; ++b) partial(b * block, std::min(n, (b + 1) * block), &parts[3 * std::size_t(b)]);
+      for (int b = b0; b < b1; ++b) partial(b * block, std::min(n, (b + 1) * block), &parts[K * std::size_t(b)]);
     });
-    out[0] = out[1] = out[2] = 0;
+    std::fill(out, out + K, 0.0);
     for (int b = 0; b < blocks; ++b)
-      for (int d = 0; d < 3; ++d) out[d] += parts[3 * std::size_t(b) + d];
+      for (int d = 0; d < K; ++d) out[d] += parts[K * std::size_t(b) + d];
   }
 
  private:
