@@ -389,12 +389,14 @@ void FastSimulator::renew_normals() {
   // made the renewal slower (docs/PERFORMANCE.md).
   const Vertices& V = topo_.V;
   const Triangles& T = topo_.T;
+  Float4* area = topo_.T.area.data();
+  const NormalsOut normals{topo_.V.nx.data(), topo_.V.ny.data(), topo_.V.nz.data()};
   par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
       if (k + kNear < e)
         for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.x[v]), prefetch_read(&V.y[v]), prefetch_read(&V.z[v]);
-      triangle_areas(topo_, unit, changed[k], changed[k] + 1);
+      triangle_areas(topo_, unit, area, changed[k], changed[k] + 1);
     }
   });
   par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
@@ -407,7 +409,7 @@ void FastSimulator::renew_normals() {
         std::atomic_ref<std::uint64_t> mark(vertex_stamp_[v]);
         std::uint64_t seen = mark.load(std::memory_order_relaxed);
         if (seen != pass_ && mark.compare_exchange_strong(seen, pass_, std::memory_order_relaxed))
-          vertex_normals(topo_, v, v + 1);
+          vertex_normals(topo_, normals, v, v + 1);
       }
     }
   });

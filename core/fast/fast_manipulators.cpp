@@ -56,16 +56,17 @@ int FastSimulator::live_slot(int id) const {
 // gather_forces made linear in f: h F / (m + 2 sum W_e) for the bounded predictor,
 // h F / m for the explicit one (DECISIONS.md D1), as the reference's predictor has it.
 void FastSimulator::add_grab_forces() {
-  Vertices& V = topo_.V;
+  const Vertices& V = topo_.V;
+  VertexForces& f = step_.forces;
   const double h = params_.h();
   for (const Grab& g : manip_.grabs) {
     const int v = live_slot(g.vertex);
     if (v < 0) continue;
-    const double m = V.m[v], row = m + double(V.ksum[v]);  // ksum: sum of W_e, from gather_forces
+    const double m = V.m[v], row = m + double(f.ksum[v]);  // ksum: sum of W_e, from gather_forces
     const std::array<double, 3> F = grab_force(g, {V.x[v], V.y[v], V.z[v]}, {V.vx[v], V.vy[v], V.vz[v]}, row, h);
-    V.fx[v] += float(F[0]), V.fy[v] += float(F[1]), V.fz[v] += float(F[2]);
-    const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * double(V.ksum[v])) : h / m;
-    V.g[v].x += float(gain * F[0]), V.g[v].y += float(gain * F[1]), V.g[v].z += float(gain * F[2]);
+    f.fx[v] += float(F[0]), f.fy[v] += float(F[1]), f.fz[v] += float(F[2]);
+    const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * double(f.ksum[v])) : h / m;
+    step_.g[v].x += float(gain * F[0]), step_.g[v].y += float(gain * F[1]), step_.g[v].z += float(gain * F[2]);
   }
 }
 

@@ -39,6 +39,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   // Refinement grows a mesh about 4x at the default floor: room for that up front.
   const std::size_t room = (params_.fracture ? 4 : 1);
   topo_.reserve(room * nv, room * 2 * nt, room * nt);
+  step_.reserve(room * nv, room * 2 * nt);
   for (Array<std::uint8_t>* a : {&decisions_, &by_id_}) a->reserve_warm(room * 2 * nt);
   tri_stamp_.reserve_warm(room * nt);
   vertex_stamp_.reserve_warm(room * nv);
@@ -96,13 +97,25 @@ float FastSimulator::length_unit() const {
 
 void FastSimulator::compute_normals() {
   const float unit = length_unit();
-  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, unit, b, e); });
-  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, b, e); });
+  Float4* area = topo_.T.area.data();
+  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, unit, area, b, e); });
+  const NormalsOut n{topo_.V.nx.data(), topo_.V.ny.data(), topo_.V.nz.data()};
+  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, n, b, e); });
 }
 
 void FastSimulator::edge_pass(const StepConstants& c) {
-  par_.run_lanes(topo_.V.size(), kGrain, [&](int b, int e) { pack_rows(topo_, b, e); });
-  par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_, c, b, e); });
+  step_.fit(topo_);
+  par_.run_lanes(topo_.V.size(), kGrain, [&](int b, int e) { pack_rows(topo_.V, step_.rows, b, e); });
+  EdgeOut* out = step_.edge_out.data();
+  par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_.E, step_.rows, c, out, b, e); });
+}
+
+void FastSimulator::gather_pass(const StepConstants& c) {
+  step_.fit(topo_);  // a no-op after edge_pass; run_pass may time this pass alone
+  const EdgeOut* records = step_.edge_out.data();
+  Float4* g = step_.g.data();
+  par_.run(topo_.V.size(), kGrain,
+           [&](int b, int e) { gather_forces(topo_, step_.rows, records, c, step_.forces, g, b, e); });
 }
 
 void FastSimulator::compute_forces() {
@@ -112,35 +125,43 @@ void FastSimulator::compute_forces() {
     edge_pass(c);
   }
   PassTimer t(pass_seconds_, int(Pass::Gather));
-  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); });
+  gather_pass(c);
 }
 
 void FastSimulator::integrate() {
   PassTimer timer(pass_seconds_, int(Pass::Integrate));
   const StepConstants c = step_constants();
   const int n = topo_.V.size();
+  step_.fit(topo_);  // a no-op after the force passes; run_pass may time this pass alone
   float corr[3] = {0, 0, 0};
   auto pin = [&] {  // pinned vertices (hang scene) are fixed neighbours in every sweep
-    for (int k : scene_.pinned) topo_.V.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
+    for (int k : scene_.pinned) step_.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
   };
   if (params_.integrator == Integrator::Explicit && params_.viscosity == 0) {
-    par_.run_lanes(n, kGrain, [&](int b, int e) { explicit_velocity(topo_, c, b, e); });
+    par_.run_lanes(n, kGrain,
+                   [&](int b, int e) { explicit_velocity(topo_.V, step_.forces, c, step_.g.data(), b, e); });
     pin();
   } else {
     pin();
     for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
-      par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, c, b, e); });
-      topo_.V.g.swap(topo_.V.g_next);
+      const Float4* g = step_.g.data();
+      Float4* g_next = step_.g_next.data();
+      par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
+      step_.g.swap(step_.g_next);
       pin();
     }
     // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
     double drift[4];  // momentum in 0..2, the total mass in 3
-    par_.sum<4>(n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_, c, b, e, out); }, drift);
+    const Float4* g = step_.g.data();
+    par_.sum<4>(
+        n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_.V, step_.forces, g, c, b, e, out); },
+        drift);
     for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
   }
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
-  par_.run_lanes(n, kGrain, [&](int b, int e) { advance(topo_, c, corr, center, radius, b, e); });
+  const Float4* g = step_.g.data();
+  par_.run_lanes(n, kGrain, [&](int b, int e) { advance(g, c, corr, center, radius, topo_.V, b, e); });
   for (int k : scene_.pinned) {  // input vertex k has logical id k
     const int v = topo_.V.phys[k];
     topo_.V.x[v] = float(scene_.position[k][0]), topo_.V.y[v] = float(scene_.position[k][1]);
@@ -193,7 +214,7 @@ void FastSimulator::run_pass(Pass p) {
   switch (p) {
     case Pass::Normals: compute_normals(); break;
     case Pass::EdgeForces: edge_pass(c); break;
-    case Pass::Gather: par_.run(topo_.V.size(), kGrain, [&](int b, int e) { gather_forces(topo_, c, b, e); }); break;
+    case Pass::Gather: gather_pass(c); break;
     case Pass::Integrate: integrate(); break;
     case Pass::AdaptTest: adapt_decide(); break;
     case Pass::TopologyApply: adapt(); break;

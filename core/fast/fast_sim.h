@@ -29,6 +29,10 @@
 //   layout     when enough elements were created since the last time, relayout() (layout.h)
 //              reorders every slot along a space-filling curve of the rest positions, keeping
 //              logical ids, so that neighbours stay in nearby cache lines (D12).
+//   data       the mesh (topology.h: hot vertex state, cold topology, adjacency) outlives the
+//              step; what the forces and integrate passes hand on to each other (rows, edge
+//              records, forces, guesses) is per-step scratch (step_scratch.h), which edits and
+//              relayout neither keep nor permute. Each kernel's signature shows what it writes.
 //   Threads only ever split a pass's range, a round or a wave; the edits touch O(events) elements and
 //   keep every helper structure (adjacency, wings) up to date incrementally, so a frame
 //   with a few hundred splits costs about what one without does.
@@ -105,6 +109,7 @@ class FastSimulator final : public Simulator {
   void compute_normals();
   void compute_forces();
   void edge_pass(const StepConstants& c);  ///< pack_rows, then edge_forces (both one pass's time)
+  void gather_pass(const StepConstants& c);
   void integrate();
   StepEvents adapt();
   void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
@@ -188,6 +193,7 @@ class FastSimulator final : public Simulator {
     std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
   };
   AdaptScratch scratch_;
+  StepScratch step_;                      ///< the physics step's rows, records, forces and guesses
   Manipulators manip_;                    ///< the caller's, applied every step
   std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction

@@ -153,7 +153,8 @@ std::vector<Vec3d> FastSimulator::forces() const {
   std::vector<Vec3d> out;
   for (int id = 0; id < tmp.topo_.V.size(); ++id) {
     const int v = tmp.topo_.V.phys[id];
-    out.push_back({tmp.topo_.V.fx[v], tmp.topo_.V.fy[v], tmp.topo_.V.fz[v]});
+    const VertexForces& f = tmp.step_.forces;
+    out.push_back({f.fx[v], f.fy[v], f.fz[v]});
   }
   return out;
 }

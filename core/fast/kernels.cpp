@@ -38,9 +38,9 @@ CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0
 }
 }  // namespace
 
-void triangle_areas(Topology& m, float unit, int begin, int end) {
+void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end) {
   triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.x.data(), m.V.y.data(),
-                      m.V.z.data(), unit, m.T.area.data(), begin, end);
+                      m.V.z.data(), unit, area, begin, end);
 }
 
 namespace {
@@ -74,12 +74,12 @@ void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, 
 }
 }  // namespace
 
-void vertex_normals(Topology& m, int begin, int end) {
+void vertex_normals(const Topology& m, NormalsOut n_out, int begin, int end) {
   const std::int32_t* __restrict at = m.V.at_t.data();
   const std::int32_t* __restrict tris = m.V.tris.data();
   const std::uint16_t* __restrict count = m.V.n_tris.data();
   const Float4* __restrict area = m.T.area.data();
-  float *__restrict nx = m.V.nx.data(), *__restrict ny = m.V.ny.data(), *__restrict nz = m.V.nz.data();
+  float *__restrict nx = n_out.x, *__restrict ny = n_out.y, *__restrict nz = n_out.z;
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
     const std::int32_t* list = tris + at[v];
@@ -109,10 +109,9 @@ void pack_rows_body(const float* __restrict x, const float* __restrict y, const 
 }
 }  // namespace
 
-void pack_rows(Topology& m, int begin, int end) {
-  Vertices& V = m.V;
+void pack_rows(const Vertices& V, PackedRows& rows, int begin, int end) {
   pack_rows_body(V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), V.m.data(), V.nx.data(),
-                 V.ny.data(), V.nz.data(), V.xm.data(), V.vm.data(), V.nr.data(), begin, end);
+                 V.ny.data(), V.nz.data(), rows.xm.data(), rows.vm.data(), rows.nr.data(), begin, end);
 }
 
 namespace {
@@ -130,9 +129,9 @@ inline Stencil stencil(const Edges& E, int e) {
 #if CRUMPLE_LANES8
 // The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
 // range's last edge in the lanes past it and stores only its own lanes.
-void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __restrict out, int begin, int end) {
+void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* __restrict out,
+                      int begin, int end) {
   using namespace lanes8;
-  const Vertices& V = m.V;
   const __m256 kappa = _mm256_set1_ps(c.kappa), damping = _mm256_set1_ps(c.damping), bend = _mm256_set1_ps(c.bend);
   const __m256 quarter = _mm256_set1_ps(c.balanced ? 0.25f : 0.0f), half = _mm256_set1_ps(0.5f);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
@@ -143,15 +142,15 @@ void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __rest
     float* dst[8];
     for (int k = 0; k < 8; ++k) {
       const int e = std::min(e0 + k, end - 1);
-      const Stencil q = stencil(m.E, e);
-      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = m.E.l0[e];
+      const Stencil q = stencil(E, e);
+      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = E.l0[e];
       dst[k] = e0 + k < end ? &out[e0 + k].fx : &spare[k].fx;
     }
     __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
-    load_rows(V.xm.data(), a, xa, ya, za, ma);
-    load_rows(V.xm.data(), b, xb, yb, zb, mb);
-    load_rows(V.vm.data(), a, vxa, vya, vza, unused);
-    load_rows(V.vm.data(), b, vxb, vyb, vzb, unused);
+    load_rows(rows.xm.data(), a, xa, ya, za, ma);
+    load_rows(rows.xm.data(), b, xb, yb, zb, mb);
+    load_rows(rows.vm.data(), a, vxa, vya, vza, unused);
+    load_rows(rows.vm.data(), b, vxb, vyb, vzb, unused);
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const __m256 dx = xa - xb, dy = ya - yb, dz = za - zb;
     const __m256 lt = _mm256_sqrt_ps(dx * dx + dy * dy + dz * dz);
@@ -161,12 +160,12 @@ void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __rest
     const __m256 s = (-kappa * (lt - _mm256_load_ps(rest)) - damping * rel) * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     __m256 nxa, nya, nza, nxb, nyb, nzb, nxl, nyl, nzl, nxr, nyr, nzr, xl, yl, zl, xr, yr, zr;
-    load_rows(V.nr.data(), a, nxa, nya, nza, unused);
-    load_rows(V.nr.data(), b, nxb, nyb, nzb, unused);
-    load_rows(V.nr.data(), l, nxl, nyl, nzl, unused);
-    load_rows(V.nr.data(), r, nxr, nyr, nzr, unused);
-    load_rows(V.xm.data(), l, xl, yl, zl, unused);
-    load_rows(V.xm.data(), r, xr, yr, zr, unused);
+    load_rows(rows.nr.data(), a, nxa, nya, nza, unused);
+    load_rows(rows.nr.data(), b, nxb, nyb, nzb, unused);
+    load_rows(rows.nr.data(), l, nxl, nyl, nzl, unused);
+    load_rows(rows.nr.data(), r, nxr, nyr, nzr, unused);
+    load_rows(rows.xm.data(), l, xl, yl, zl, unused);
+    load_rows(rows.xm.data(), r, xr, yr, zr, unused);
     const __m256 nrl = nxr * nxl + nyr * nyl + nzr * nzl;
     const __m256 Bmag = (one - nrl) * lt * half;
     const __m256 gx = (xr + nxr) - (xl + nxl), gy = (yr + nyr) - (yl + nyl), gz = (zr + nzr) - (zl + nzl);
@@ -181,21 +180,20 @@ void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __rest
 }
 #else
 // The same pass one edge at a time (a target without AVX2, or the no-SIMD build).
-CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstants& c, EdgeOut* __restrict out,
-                                            int begin, int end) {
-  const Vertices& V = m.V;
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstants& c,
+                                            EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
-    const Stencil q = stencil(m.E, e);
-    const Float4 pa = V.xm[q.a], pb = V.xm[q.b], va = V.vm[q.a], vb = V.vm[q.b];
-    const Float4 na = V.nr[q.a], nb = V.nr[q.b], nl = V.nr[q.l], nr = V.nr[q.r], pl = V.xm[q.l], pr = V.xm[q.r];
+    const Stencil q = stencil(E, e);
+    const Float4 pa = rows.xm[q.a], pb = rows.xm[q.b], va = rows.vm[q.a], vb = rows.vm[q.b];
+    const Float4 na = rows.nr[q.a], nb = rows.nr[q.b], nl = rows.nr[q.l], nr = rows.nr[q.r], pl = rows.xm[q.l], pr = rows.xm[q.r];
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const float dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
     const float inv = lt > 0 ? 1.0f / lt : 0.0f;
     const float msum = pa.w + pb.w;
     const float rel = -((vb.x - va.x) * dx + (vb.y - va.y) * dy + (vb.z - va.z) * dz) * inv;
-    const float s = (-c.kappa * (lt - m.E.l0[e]) - c.damping * rel) * msum * inv;
+    const float s = (-c.kappa * (lt - E.l0[e]) - c.damping * rel) * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     const float nrl = nr.x * nl.x + nr.y * nl.y + nr.z * nl.z;
     const float Bmag = (1.0f - nrl) * lt * 0.5f;
@@ -212,8 +210,8 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Topology& m, const StepConstan
 #endif
 }  // namespace
 
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  edge_forces_body(m, c, m.E.out.data(), begin, end);
+void edge_forces(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* out, int begin, int end) {
+  edge_forces_body(E, rows, c, out, begin, end);
 }
 
 namespace {
@@ -230,10 +228,11 @@ const Row kAsEndpoint[2] = {
 const Row kAsWing{{0, 0, 0, 1, 1, 1, 1, 0}};
 }  // namespace
 
-void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
-  Vertices& V = m.V;
-  const EdgeOut* __restrict out = m.E.out.data();
-  const Float4* __restrict vm = V.vm.data();
+void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* records, const StepConstants& c,
+                   VertexForces& f, Float4* g, int begin, int end) {
+  const Vertices& V = m.V;
+  const EdgeOut* __restrict out = records;
+  const Float4* __restrict vm = rows.vm.data();
   for (int v = begin; v < end; ++v) {
     if (v + kAhead < end) {
       const int a = v + kAhead;
@@ -269,26 +268,27 @@ void gather_forces(Topology& m, const StepConstants& c, int begin, int end) {
     fx += kn * V.nx[v] - mx;
     fy += kn * V.ny[v] - my;
     fz += kn * V.nz[v] - mz - mass * c.gravity;
-    V.fx[v] = fx;
-    V.fy[v] = fy;
-    V.fz[v] = fz;
-    V.ksum[v] = ks;
+    f.fx[v] = fx;
+    f.fy[v] = fy;
+    f.fz[v] = fz;
+    f.ksum[v] = ks;
     const float dead = mass > 0 ? 0.0f : 1.0f;
     if (c.bounded) {
       // Bounded predictor (DECISIONS.md D1): the row with its Gershgorin diagonal, g exact.
       const float inv = 1.0f / (mass + 2.0f * ks + dead);
-      V.g[v] = Float4{self[0] + (c.h * fx + jx) * inv, self[1] + (c.h * fy + jy) * inv,
-                      self[2] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + jz) * inv, mass};
+      g[v] = Float4{self[0] + (c.h * fx + jx) * inv, self[1] + (c.h * fy + jy) * inv,
+                    self[2] - c.h * c.gravity + (c.h * (fz + mass * c.gravity) + jz) * inv, mass};
     } else {
       const float inv = c.h / (mass + dead);
-      V.g[v] = Float4{self[0] + fx * inv, self[1] + fy * inv, self[2] + fz * inv, mass};
+      g[v] = Float4{self[0] + fx * inv, self[1] + fy * inv, self[2] + fz * inv, mass};
     }
   }
 }
 
-void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
-  Vertices& V = m.V;
-  const Float4* __restrict g = V.g.data();
+void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants& c, const Float4* g_in,
+                  Float4* g_next, int begin, int end) {
+  const Vertices& V = m.V;
+  const Float4* __restrict g = g_in;
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
     const float mass = V.m[v];
@@ -303,28 +303,28 @@ void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end) {
     for (int k = 0; k < kFixed; ++k) add(k < n ? &g[nbrs[k]] : &kZero4);
     for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
     const float sx = sum[0], sy = sum[1], sz = sum[2];
-    const float inv = 1.0f / (mass + V.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
-    V.g_next[v] = Float4{(mass * V.vx[v] + c.h * V.fx[v] + sx) * inv,
-                         (mass * V.vy[v] + c.h * V.fy[v] + sy) * inv,
-                         (mass * V.vz[v] + c.h * V.fz[v] + sz) * inv, mass};
+    const float inv = 1.0f / (mass + f.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
+    g_next[v] = Float4{(mass * V.vx[v] + c.h * f.fx[v] + sx) * inv,
+                       (mass * V.vy[v] + c.h * f.fy[v] + sy) * inv,
+                       (mass * V.vz[v] + c.h * f.fz[v] + sz) * inv, mass};
   }
 }
 
-void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end) {
-  Vertices& V = m.V;
+void explicit_velocity(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* g, int begin,
+                       int end) {
   for (int v = begin; v < end; ++v) {
     const float inv = V.m[v] > 0 ? c.h / V.m[v] : 0.0f;
-    V.g[v] = Float4{V.vx[v] + V.fx[v] * inv, V.vy[v] + V.fy[v] * inv, V.vz[v] + V.fz[v] * inv, V.m[v]};
+    g[v] = Float4{V.vx[v] + f.fx[v] * inv, V.vy[v] + f.fy[v] * inv, V.vz[v] + f.fz[v] * inv, V.m[v]};
   }
 }
 
-void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[4]) {
-  const Vertices& V = m.V;
+void momentum_drift(const Vertices& V, const VertexForces& f, const Float4* g, const StepConstants& c, int begin,
+                    int end, double out[4]) {
   double sx = 0, sy = 0, sz = 0, mass = 0;
   for (int v = begin; v < end; ++v) {
-    sx += double(V.m[v]) * (double(V.g[v].x) - V.vx[v]) - double(c.h) * V.fx[v];
-    sy += double(V.m[v]) * (double(V.g[v].y) - V.vy[v]) - double(c.h) * V.fy[v];
-    sz += double(V.m[v]) * (double(V.g[v].z) - V.vz[v]) - double(c.h) * V.fz[v];
+    sx += double(V.m[v]) * (double(g[v].x) - V.vx[v]) - double(c.h) * f.fx[v];
+    sy += double(V.m[v]) * (double(g[v].y) - V.vy[v]) - double(c.h) * f.fy[v];
+    sz += double(V.m[v]) * (double(g[v].z) - V.vz[v]) - double(c.h) * f.fz[v];
     mass += V.m[v];
   }
   out[0] = sx;
@@ -372,11 +372,10 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
 }
 }  // namespace
 
-void advance(Topology& m, const StepConstants& c, const float corr[3], const float center[3], float radius,
-             int begin, int end) {
-  Vertices& V = m.V;
-  advance_body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(),
-               V.g.data(), V.m.data(), begin, end);
+void advance(const Float4* g, const StepConstants& c, const float corr[3], const float center[3], float radius,
+             Vertices& V, int begin, int end) {
+  advance_body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), g,
+               V.m.data(), begin, end);
 }
 
 namespace {

@@ -1,13 +1,16 @@
 // The fast backend's kernels. Each one computes a range [begin, end) of one pass and writes
-// only the outputs of its own elements, so the same body runs in a plain loop, inside
-// tbb::parallel_for, and in a test; no kernel scatters, so there is nothing to race on and
-// every sum has one order on any thread count (sums over a vertex's adjacency list in list
-// order). The loops are written for the auto-vectorizer (SoA arrays, no early exits, selects
-// instead of branches); CRUMPLE_DISABLE_SIMD builds the same source with vectorization off.
+// only the outputs of its own elements. What it reads comes as const; what it writes is in the
+// arguments that are not (an output array, or the part of the step scratch it fills:
+// step_scratch.h). So the same body runs in a plain loop, inside tbb::parallel_for, and in a
+// test; no kernel scatters, so there is nothing to race on and every sum has one order on any
+// thread count (sums over a vertex's adjacency list in list order). The loops are written for
+// the auto-vectorizer (SoA arrays, no early exits, selects instead of branches);
+// CRUMPLE_DISABLE_SIMD builds the same source with vectorization off.
 #pragma once
 
 #include <cstdint>
 
+#include "fast/step_scratch.h"
 #include "fast/topology.h"
 
 namespace crumple::fast {
@@ -25,30 +28,42 @@ struct StepConstants {
   bool bounded = true;       ///< bounded predictor (docs/DECISIONS.md D1), else explicit
 };
 
-/// Area vector (x1 - x0) x (x2 - x0) of each triangle (zero for dead ones), in units of 1/unit:
-/// the edges are scaled by `unit` (a power of two, FastSimulator::length_unit) before the product,
-/// which changes no normal's bits and keeps a tiny mesh's products out of float's subnormals.  §1
-void triangle_areas(Topology& m, float unit, int begin, int end);
-/// n_v = normalized sum of the area vectors of v's triangles.                         §1
-void vertex_normals(Topology& m, int begin, int end);
-/// Packs the per-step rows xm, vm, nr (topology.h) from position, velocity, mass and normal.
-void pack_rows(Topology& m, int begin, int end);
-/// Per edge, from the packed rows: the spring force on endpoint a (Hookean with kappa_e [Eq 5],
-/// damping), and the bending magnitude s C_beta B and balanced mean of its stencil [Eq 8-9].
-void edge_forces(Topology& m, const StepConstants& c, int begin, int end);
-/// Per vertex: gathers f_v, sum W_e and sum W_e (v_o - v_v) over its springs (the blocks from the
-/// neighbours' rows), and writes the first Jacobi guess (the predictor, §3) with m_v in w.
-void gather_forces(Topology& m, const StepConstants& c, int begin, int end);
+/// Area vector (x1 - x0) x (x2 - x0) of each triangle (zero for dead ones), in units of 1/unit,
+/// into area[t]: the edges are scaled by `unit` (a power of two, FastSimulator::length_unit)
+/// before the product, which changes no normal's bits and keeps a tiny mesh's products out of
+/// float's subnormals.                                                                 §1
+void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end);
+/// Where vertex_normals writes n_v (the mesh's own nx, ny, nz: the normals outlive the step).
+struct NormalsOut {
+  float *x, *y, *z;
+};
+/// n_v = normalized sum of the area vectors (m.T.area) of v's triangles.                §1
+void vertex_normals(const Topology& m, NormalsOut n, int begin, int end);
+/// Packs position, velocity, mass and normal into the 16-byte rows of step_scratch.h.
+void pack_rows(const Vertices& V, PackedRows& rows, int begin, int end);
+/// Per edge, from the packed rows, into out[e]: the spring force on endpoint a (Hookean with
+/// kappa_e [Eq 5], damping), and the bending magnitude s C_beta B and balanced mean of its
+/// stencil [Eq 8-9].
+void edge_forces(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* out, int begin, int end);
+/// Per vertex: gathers f_v, sum W_e and sum W_e (v_o - v_v) over its springs (the edge records
+/// and the neighbours' rows) into f, and writes the first Jacobi guess g (the predictor, §3)
+/// with m_v in w.
+void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* records, const StepConstants& c,
+                   VertexForces& f, Float4* g, int begin, int end);
 /// One Jacobi sweep of the implicit velocity step (approx, viscosity): reads g, writes g_next. §3
-void jacobi_sweep(Topology& m, const StepConstants& c, int begin, int end);
+void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants& c, const Float4* g,
+                  Float4* g_next, int begin, int end);
 /// Symplectic Euler's new velocity into g: v + h f / m.                               §3
-void explicit_velocity(Topology& m, const StepConstants& c, int begin, int end);
+void explicit_velocity(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* g, int begin,
+                       int end);
 /// Sums over [begin, end) of m (g - v) - h f (the momentum a finite sweep count adds) into
 /// out[0..2] and of m into out[3], in double.
-void momentum_drift(const Topology& m, const StepConstants& c, int begin, int end, double out[4]);
-/// v = g - correction, x += h v, then the sphere constraint (radius <= 0: none).       §3, §8
-void advance(Topology& m, const StepConstants& c, const float correction[3], const float center[3],
-             float radius, int begin, int end);
+void momentum_drift(const Vertices& V, const VertexForces& f, const Float4* g, const StepConstants& c, int begin,
+                    int end, double out[4]);
+/// The new velocity v = g - correction into V's velocities and x += h v into its positions,
+/// then the sphere constraint (radius <= 0: none).                                     §3, §8
+void advance(const Float4* g, const StepConstants& c, const float correction[3], const float center[3],
+             float radius, Vertices& V, int begin, int end);
 
 /// Constants of the fracture and restoration tests.
 struct AdaptConstants {

@@ -35,11 +35,10 @@ void reserve_all(std::size_t n, A&... arrays) {
 }  // namespace
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
-  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.xm,
-              V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
+  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
-  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out, E.lid, E.phys);
+  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
   records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
@@ -94,8 +93,7 @@ std::int32_t append_block(Array<std::int32_t>& list, Array<std::int32_t>& parall
 
 void Topology::fit() {
   if (const std::size_t n = V.lid.size(), old = V.m.size(); n != old) {
-    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.fx, V.fy, V.fz, V.ksum, V.g, V.g_next, V.xm, V.vm,
-         V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
+    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
     // One block of the least room per new slot, in slot order.
     const std::int32_t at_e = append_block(V.springs, V.nbrs, (n - old) * kMinRoom);
     const std::int32_t at_t = append_block(V.tris, V.wings, (n - old) * kMinRoom);
@@ -107,7 +105,7 @@ void Topology::fit() {
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
   if (const std::size_t n = E.lid.size(); n != E.a.size())
-    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.out);
+    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
     grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
 }
@@ -131,7 +129,6 @@ void Topology::init_edge(int e, int a, int b, float l0) {
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
   E.l0[e] = l0;
   E.flags[e] = kAlive | kMesh | kBreakable;
-  E.out[e] = EdgeOut{};
   list_spring(a, e << 1, b);
   list_spring(b, (e << 1) | 1, a);
 }
@@ -143,7 +140,6 @@ void Topology::release_edge(int e) {
   E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
   E.l0[e] = 1;
   E.flags[e] = 0;
-  E.out[e] = EdgeOut{};
 }
 
 int Topology::new_triangle() {

@@ -1,5 +1,7 @@
 // The fast backend's mesh: structure-of-arrays topology and state (Jolt's split of immutable-ish
-// topology from per-step state, Box2D's hot/cold split), and the serial topology edits.
+// topology from per-step state, Box2D's hot/cold split), and the serial topology edits. What
+// only one step's passes read (rows, edge records, forces, guesses) is not here but in
+// step_scratch.h.
 //
 // Vertices, edges and triangles are *slots* in parallel arrays, and each slot carries a logical
 // id (`lid`) with its inverse map (`phys`). Logical ids follow the id policy of sim/simulator.h,
@@ -73,34 +75,12 @@ struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
 };
 
-/// What the edge pass leaves for the vertex gather: what the gather cannot compute from the two
-/// endpoints' rows (their velocities and masses give the implicit block W_e and W_e (v_b - v_a),
-/// so those are not stored). 32 bytes, two records to a cache line: the edge pass writes them in
-/// order with whole 16-byte stores, the gather reads them at random.
-struct alignas(32) EdgeOut {
-  float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
-  float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
-  float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
-  float pad = 0;                 ///< to 32 bytes
-};
-
 struct Vertices {
   // hot, per step (float: the fast backend's precision)
   Array<float> x, y, z;      ///< position x_k
   Array<float> vx, vy, vz;   ///< velocity v_k
   Array<float> m;            ///< mass m_k (0: dead)
   Array<float> nx, ny, nz;   ///< vertex normal n_k (MODEL.md §1)
-  Array<float> fx, fy, fz;   ///< total force f_k of this step
-  Array<float> ksum;         ///< sum of W_e over the vertex's springs
-  Array<Float4> g;           ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
-                             ///< what a sweep gathers from each neighbour, in one load
-  Array<Float4> g_next;      ///< the next sweep's guess (double buffer)
-  // per-step rows, packed from the arrays above by pack_rows (kernels.h) before the edge pass,
-  // so that a random neighbour costs one 16-byte load per quantity, not one line per array.
-  // Never read before that pass has rebuilt them, so edits and relayout need not keep them.
-  Array<Float4> xm;          ///< (x, y, z, m)
-  Array<Float4> vm;          ///< (vx, vy, vz, m)
-  Array<Float4> nr;          ///< (nx, ny, nz, 0)
   // cold
   Array<float> rx, ry, rz;   ///< rest position X_k
   // adjacency (see the file comment): two pools of blocks, each with a parallel pool
@@ -131,7 +111,6 @@ struct Edges {
   Array<float> l0;               ///< rest length
   Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
   Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
-  Array<EdgeOut> out;            ///< per-step output of the edge pass
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
   Array<std::int32_t> phys;      ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids

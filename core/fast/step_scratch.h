@@ -1,0 +1,64 @@
+// The physics step's per-slot scratch, apart from the mesh (topology.h): what one step's passes
+// write for the next pass of the same step and nothing after it reads. Every pass that reads an
+// array runs after the pass that rebuilt it in the same step, so topology edits and relayout
+// neither keep nor permute any of it; it only follows the slot counts (fit).
+#pragma once
+
+#include <cstddef>
+
+#include "fast/aligned.h"
+#include "fast/topology.h"
+
+namespace crumple::fast {
+
+/// What the edge pass leaves for the vertex gather: what the gather cannot compute from the two
+/// endpoints' rows (their velocities and masses give the implicit block W_e and W_e (v_b - v_a),
+/// so those are not stored). 32 bytes, two records to a cache line: the edge pass writes them in
+/// order with whole 16-byte stores, the gather reads them at random.
+struct alignas(32) EdgeOut {
+  float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
+  float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
+  float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
+  float pad = 0;                 ///< to 32 bytes
+};
+
+/// Position, velocity and normal of every vertex slot packed in 16-byte rows (pack_rows), so
+/// that a random neighbour costs one load per quantity, not one line per SoA array.
+struct PackedRows {
+  Array<Float4> xm;  ///< (x, y, z, m)
+  Array<Float4> vm;  ///< (vx, vy, vz, m)
+  Array<Float4> nr;  ///< (nx, ny, nz, 0)
+};
+
+/// What the gather sums per vertex slot (gather_forces) and the integrators read.
+struct VertexForces {
+  Array<float> fx, fy, fz;  ///< total force f_k of this step
+  Array<float> ksum;        ///< sum of W_e over the vertex's springs (the implicit row's diagonal)
+};
+
+struct StepScratch {
+  PackedRows rows;
+  Array<EdgeOut> edge_out;  ///< per edge slot: the edge pass's record for the gather
+  VertexForces forces;
+  Array<Float4> g;          ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
+                            ///< what a sweep gathers from each neighbour, in one load
+  Array<Float4> g_next;     ///< the next sweep's guess (double buffer)
+
+  /// Room for this many slots without reallocating (growth past it is geometric).
+  void reserve(std::size_t vertices, std::size_t edges) {
+    for (Array<Float4>* a : {&rows.xm, &rows.vm, &rows.nr, &g, &g_next}) a->reserve_warm(vertices);
+    for (Array<float>* a : {&forces.fx, &forces.fy, &forces.fz, &forces.ksum}) a->reserve_warm(vertices);
+    edge_out.reserve_warm(edges);
+  }
+  /// Sizes every array to the mesh's slots (values are rebuilt by the passes before any read).
+  void fit(const Topology& m) {
+    const std::size_t nv = std::size_t(m.V.size()), ne = std::size_t(m.E.size());
+    if (g.size() != nv) {
+      for (Array<Float4>* a : {&rows.xm, &rows.vm, &rows.nr, &g, &g_next}) a->resize(nv), a->keep_warm();
+      for (Array<float>* a : {&forces.fx, &forces.fy, &forces.fz, &forces.ksum}) a->resize(nv), a->keep_warm();
+    }
+    if (edge_out.size() != ne) edge_out.resize(ne), edge_out.keep_warm();
+  }
+};
+
+}  // namespace crumple::fast
