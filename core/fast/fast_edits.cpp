@@ -2,7 +2,7 @@
 // the restoration of an auxiliary edge [Eq 10-12], with the same id policy as the reference
 // backend. Mass and momentum bookkeeping is done in double and stored in float. Each edit reads
 // and writes only its own vertices, their lists and the edges and triangles among them, so that
-// fast_adapt.cpp can apply events of disjoint vertices in parallel.
+// split_rounds.cpp and restore_waves.cpp can apply events of disjoint vertices in parallel.
 #include <algorithm>
 #include <cmath>
 
@@ -35,7 +35,7 @@ bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
 }
 }  // namespace
 
-FastSimulator::SplitCandidate FastSimulator::split_candidate(int e) const {
+SplitCandidate FastSimulator::split_candidate(int e) const {
   const Edges& E = topo_.E;
   SplitCandidate c;
   if (E.flags[e] != (kAlive | kMesh | kBreakable)) return c;
@@ -46,7 +46,7 @@ FastSimulator::SplitCandidate FastSimulator::split_candidate(int e) const {
   return c;
 }
 
-FastSimulator::SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
+SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
   Topology& m = topo_;
   SplitPlan p;
   if (c.e < 0) return p;

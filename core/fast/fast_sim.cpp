@@ -41,9 +41,10 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   topo_.reserve(room * nv, room * 2 * nt, room * nt);
   step_.reserve(room * nv, room * 2 * nt);
   for (Array<std::uint8_t>* a : {&decisions_, &by_id_}) a->reserve_warm(room * 2 * nt);
-  tri_stamp_.reserve_warm(room * nt);
+  stamps_.reserve(room * nt);
   vertex_stamp_.reserve_warm(room * nv);
-  for (Array<int>* a : {&round_last_, &spring_adds_, &tri_adds_, &claim_}) a->reserve_warm(room * nv);
+  rounds_.reserve(room * nv);
+  waves_.reserve(room * nv);
   for (int k = 0; k < nv; ++k) {
     const int v = topo_.new_vertex();
     topo_.V.rx[v] = float(scene_.rest[k][0]);

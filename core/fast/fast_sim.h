@@ -44,6 +44,9 @@
 #include "fast/kernels.h"
 #include "fast/layout.h"
 #include "fast/parallel.h"
+#include "fast/pass_events.h"
+#include "fast/restore_waves.h"
+#include "fast/split_rounds.h"
 #include "fast/topology.h"
 #include "sim/scene.h"
 #include "sim/simulator.h"
@@ -100,9 +103,9 @@ class FastSimulator final : public Simulator {
   /// rounds and waves (which must give the same result, bit for bit).
   void set_serial_edits(bool on) { serial_edits_ = on; }
   /// Split rounds so far large enough to run as a parallel loop (tests check they happened).
-  std::uint64_t large_rounds() const { return large_rounds_; }
+  std::uint64_t large_rounds() const { return rounds_.large_rounds(); }
   /// Restore waves so far large enough to run as a parallel loop (tests check they happened).
-  std::uint64_t large_waves() const { return large_waves_; }
+  std::uint64_t large_waves() const { return waves_.large_waves(); }
 
  private:
   StepConstants step_constants() const;
@@ -113,39 +116,21 @@ class FastSimulator final : public Simulator {
   void integrate();
   StepEvents adapt();
   void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
-  StepEvents adapt_apply();///< the serial splits and restores of decisions_
-  /// A split with its new ids taken in advance (serially, in event order), so that splits of
-  /// disjoint vertex sets can then apply in parallel.
-  /// What a split of edge e needs to know before it is planned (read in parallel).
-  struct SplitCandidate {
-    int e = -1;                               ///< the edge (-1: not splittable)
-    float flat_draw = 0;                      ///< the FlatSign draw of [Eq 7]
-    std::array<int, 2> tris{-1, -1};          ///< tri0, tri1 at the start of the pass
-    std::array<int, 4> ends{-1, -1, -1, -1};  ///< i, j, l, r (-1: no wing)
-  };
-  struct SplitPlan {
-    int e = -1;                          ///< the edge (-1: not splittable)
-    float flat_draw = 0;                 ///< the FlatSign draw of [Eq 7]
-    std::array<int, 4> ends{-1, -1, -1, -1};  ///< i, j, l, r (-1: no wing)
-    int n = -1;                          ///< the new vertex
-    std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
-    std::array<int, 2> tris{-1, -1};     ///< (n,j,l), (n,i,r)
-    int record = -1;                     ///< the split record
-  };
+  StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
   // The caller's manipulators (fast_manipulators.cpp).
   int live_slot(int id) const;  ///< slot of live vertex id, else -1
   void add_grab_forces();       ///< after compute_forces: into f and the first guess
   void apply_manipulators();    ///< spheres, planes, then pins
-  // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13), the
-  // restores in waves (D14), then the areas and normals renewed where triangles changed.
+  // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13,
+  // split_rounds.h), the restores in waves (D14, restore_waves.h), then the areas and normals
+  // renewed where triangles changed.
+  friend class SplitRounds;
+  friend class RestoreWaves;
+  friend struct SerialEvents;
   void collect_events();
-  int apply_splits();   ///< returns the splits applied
-  int apply_restores(); ///< returns the restores applied
   void renew_normals();
-  bool touched(int t) const;  ///< triangle t was changed by this pass
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
   double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
-  void stamp(int t);          ///< marks triangle t changed by this pass
   // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;
   SplitPlan plan_split(const SplitCandidate& c);  ///< takes the new ids (serial, in event order)
@@ -168,38 +153,21 @@ class FastSimulator final : public Simulator {
   // room, growth is faulted in ahead: D16), reserved with it in the constructor.
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
   Array<std::uint8_t> by_id_;             ///< the nonzero decisions per logical id (0 between passes)
-  Array<std::uint64_t> tri_stamp_;        ///< pass that last changed each triangle
   Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
-  Array<int> round_last_;                 ///< per vertex: round of its last split in this pass (0: none)
-  Array<int> spring_adds_;                ///< per vertex: springs the splits of this pass add
-  Array<int> tri_adds_;                   ///< per vertex: triangles the splits of this pass add
-  Array<int> claim_;                      ///< per vertex: 1 + the restore candidate claiming it in a wave
-  struct RestoreCandidate {
-    std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
-    std::uint8_t answer;       ///< on the state after the pass's splits (fast_adapt.cpp)
+  /// collect_events' temporaries, kept from pass to pass so that a pass allocates (and faults
+  /// in) no memory.
+  struct EventLists {
+    std::vector<std::vector<int>> found;  ///< event slots per block of ids and kind
+    std::vector<int> splits, restores;    ///< event slots in event order
   };
-  /// adapt_apply's temporaries, kept from pass to pass so that a pass allocates (and faults
-  /// in) no memory: fast_adapt.cpp says what each holds.
-  struct AdaptScratch {
-    std::vector<std::vector<int>> found;            ///< event slots per block of ids and kind
-    std::vector<int> splits, restores;              ///< event slots in event order
-    std::vector<SplitCandidate> split_candidates;   ///< per split event
-    std::vector<RestoreCandidate> restore_candidates;  ///< per restore event
-    std::vector<int> changed;                       ///< triangles changed in the pass
-    std::vector<SplitPlan> plans;                   ///< accepted splits
-    std::vector<int> round_of, involved, by_round, start, fill;  ///< split rounds
-    std::vector<std::uint8_t> applied;              ///< per plan
-    std::vector<int> pending, next, wave, claimed;  ///< restore waves
-    std::vector<std::pair<int, Freed>> freed;       ///< per accepted restore
-  };
-  AdaptScratch scratch_;
+  EventLists events_;
+  TriangleStamps stamps_;                 ///< the triangles this pass's events changed
+  SplitRounds rounds_;                    ///< the splits' unit, with its scratch
+  RestoreWaves waves_;                    ///< the restores' unit, with its scratch
   StepScratch step_;                      ///< the physics step's rows, records, forces and guesses
   Manipulators manip_;                    ///< the caller's, applied every step
-  std::uint64_t pass_ = 0;                ///< topology passes so far
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_edits_ = false;             ///< see set_serial_edits
-  std::uint64_t large_rounds_ = 0;        ///< see large_rounds
-  std::uint64_t large_waves_ = 0;         ///< see large_waves
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};

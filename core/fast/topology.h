@@ -62,7 +62,7 @@ struct SplitRecord {
 };
 
 /// The slots one restore frees, in the order it frees them (-1: none): Topology::free_ids puts
-/// them on the free lists, after the restores of a wave ran in parallel (fast_adapt.cpp).
+/// them on the free lists, after the restores of a wave ran in parallel (restore_waves.h).
 struct Freed {
   std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
   std::array<int, 2> tris{-1, -1};           ///< (n,j,l), (n,i,r)

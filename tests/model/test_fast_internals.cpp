@@ -1,8 +1,9 @@
 // The fast backend's internal machinery, which must not change what is simulated: the slot
 // layout (core/fast/layout.h) changes only where things are stored; the parallel rounds of
-// splits and waves of restores (fast_adapt.cpp) give what one event after the other gives; the
-// wide rows (wide.h) add lane by lane as scalars do; the arrays keep their room when copied;
-// vectorized kernels run in chunks aligned to lanes (parallel.h).
+// splits and waves of restores (split_rounds.h, restore_waves.h) give what one event after the
+// other gives (serial_events.h); the wide rows (wide.h) add lane by lane as scalars do; the
+// arrays keep their room when copied; vectorized kernels run in chunks aligned to lanes
+// (parallel.h).
 #include <atomic>
 #include <cmath>
 #include <cstring>

@@ -1,0 +1,66 @@
+// What the topology pass's two units (split_rounds.h, restore_waves.h) and one event's edits
+// (fast_edits.cpp) hand each other: the candidates and plans of splits and restores, and the
+// stamps that mark the triangles an accepted event of this pass changed (MODEL.md §4: an event
+// is skipped when an earlier one of the pass changed one of its triangles).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "fast/aligned.h"
+
+namespace crumple::fast {
+
+/// What a split of edge e needs to know before it is planned (read in parallel).
+struct SplitCandidate {
+  int e = -1;                               ///< the edge (-1: not splittable)
+  float flat_draw = 0;                      ///< the FlatSign draw of [Eq 7]
+  std::array<int, 2> tris{-1, -1};          ///< tri0, tri1 at the start of the pass
+  std::array<int, 4> ends{-1, -1, -1, -1};  ///< i, j, l, r (-1: no wing)
+};
+
+/// A split with its new ids taken in advance (serially, in event order), so that splits of
+/// disjoint vertex sets can then apply in parallel.
+struct SplitPlan {
+  int e = -1;                                ///< the edge (-1: not splittable)
+  float flat_draw = 0;                       ///< the FlatSign draw of [Eq 7]
+  std::array<int, 4> ends{-1, -1, -1, -1};   ///< i, j, l, r (-1: no wing)
+  int n = -1;                                ///< the new vertex
+  std::array<int, 4> edges{-1, -1, -1, -1};  ///< e_in, e_nj, e_ln, e_nr
+  std::array<int, 2> tris{-1, -1};           ///< (n,j,l), (n,i,r)
+  int record = -1;                           ///< the split record
+};
+
+/// The triangles changed by the accepted events of the current pass. Pass numbers, not flags:
+/// a new pass forgets the last one's marks without clearing an array the size of the mesh.
+class TriangleStamps {
+ public:
+  void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
+  /// Starts a pass: no triangle is changed yet.
+  void begin_pass() {
+    ++pass_;
+    changed_.clear();
+  }
+  std::uint64_t pass() const { return pass_; }
+  /// Triangle t (-1: none) was changed by an accepted event of this pass.
+  bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == pass_; }
+  /// Marks triangle t (-1: none) changed by this pass (serial: the pre-passes and scans).
+  void mark(int t) {
+    if (t < 0) return;
+    if (t >= int(stamp_.size())) stamp_.resize(std::size_t(t) + 1, 0);
+    if (stamp_[t] != pass_) changed_.push_back(t);
+    stamp_[t] = pass_;
+  }
+  /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
+  const std::uint64_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
+  /// The changed triangles, each once, in the order they were first marked.
+  const std::vector<int>& changed() const { return changed_; }
+
+ private:
+  Array<std::uint64_t> stamp_;  ///< pass that last changed each triangle
+  std::vector<int> changed_;
+  std::uint64_t pass_ = 0;
+};
+
+}  // namespace crumple::fast

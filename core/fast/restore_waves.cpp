@@ -1,0 +1,92 @@
+#include "fast/restore_waves.h"
+
+#include <algorithm>
+
+#include "fast/event_prefetch.h"
+#include "fast/fast_sim.h"
+
+namespace crumple::fast {
+
+namespace {
+constexpr int kWaveGrain = 32;          ///< waves are smaller than rounds, and a restore costs about what a split does
+constexpr int kRestoreTestGrain = 128;  ///< a restore test reads a record and its triangles: more per item
+
+bool any_touched(const SplitRecord& r, const TriangleStamps& stamps) {
+  return std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); });
+}
+}  // namespace
+
+void RestoreWaves::reserve(std::size_t vertices) { claim_.reserve_warm(vertices); }
+
+int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps) {
+  pretest(sim, restores, stamps);
+  claim_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between waves
+  pending_.clear();
+  for (int k = 0; k < int(candidates_.size()); ++k)
+    if (candidates_[k].answer != kNever) pending_.push_back(k);
+  freed_.clear();
+  const Topology& m = sim.topo_;
+  for (bool first = true; !pending_.empty(); first = false) {
+    scan(sim, restores, stamps, first);
+    const std::size_t done = freed_.size();
+    freed_.resize(done + wave_.size());
+    sim.par_.run(int(wave_.size()), kWaveGrain, [&](int b, int e) {
+      for (int q = b; q < e; ++q) {
+        if (q + kNear < e) prefetch_restore(m, restores[wave_[q + kNear]]);
+        const int k = wave_[q];
+        freed_[done + q] = {k, sim.restore_edge_local(restores[k])};
+      }
+    });
+    for (int v : claimed_) claim_[v] = 0;
+    large_waves_ += wave_.size() > std::size_t(kWaveGrain);
+    pending_.swap(next_);
+  }
+  std::sort(freed_.begin(), freed_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& f : freed_) sim.topo_.free_ids(f.second);
+  return int(freed_.size());
+}
+
+// Every candidate's answer on the state after the splits, in parallel. The stamps are the
+// splits' only: a restore's stamps matter to candidates that share its vertices, which wait for
+// a later wave and test again there.
+void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
+  const Topology& m = sim.topo_;
+  const int nr = int(restores.size());
+  candidates_.resize(std::size_t(nr));
+  sim.par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      if (k + kNear < e) prefetch(&m.records[m.E.record[restores[k + kNear]]]);
+      const int edge = restores[k];
+      const SplitRecord& r = m.records[m.E.record[edge]];
+      const Answer answer = any_touched(r, stamps) ? kNever : sim.can_restore(edge) ? kRestorable : kNotNow;
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
+    }
+  });
+}
+
+void RestoreWaves::scan(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps, bool first) {
+  const Topology& m = sim.topo_;
+  next_.clear(), wave_.clear(), claimed_.clear();
+  for (std::size_t q = 0; q < pending_.size(); ++q) {
+    if (q + kFar < pending_.size())
+      for (int v : candidates_[pending_[q + kFar]].verts)
+        if (v >= 0) prefetch(&claim_[v]);
+    const int k = pending_[q], e = restores[k];
+    const std::array<int, 5>& verts = candidates_[k].verts;
+    const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
+    if (!waits) {
+      if (first && candidates_[k].answer != kRestorable) continue;
+      if (!first && (any_touched(m.records[m.E.record[e]], stamps) || !sim.can_restore(e))) continue;
+    }
+    for (int v : verts)
+      if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed_.push_back(v);
+    if (waits) {
+      next_.push_back(k);
+      continue;
+    }
+    wave_.push_back(k);
+    for (int t : m.records[m.E.record[e]].t) stamps.mark(t);
+  }
+}
+
+}  // namespace crumple::fast

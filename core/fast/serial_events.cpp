@@ -1,0 +1,35 @@
+#include "fast/serial_events.h"
+
+#include <algorithm>
+
+#include "fast/fast_sim.h"
+
+namespace crumple::fast {
+
+int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
+  const Topology& m = sim.topo_;
+  int done = 0;
+  for (int e : splits) {
+    if (stamps.touched(m.E.tri0[e]) || stamps.touched(m.E.tri1[e])) continue;
+    if (!sim.split_edge(e)) continue;
+    for (int t : m.records[m.E.record[e]].t) stamps.mark(t);
+    ++done;
+  }
+  return done;
+}
+
+int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps) {
+  const Topology& m = sim.topo_;
+  int done = 0;
+  for (int e : restores) {
+    const SplitRecord& r = m.records[m.E.record[e]];
+    if (std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); }) || !sim.can_restore(e)) continue;
+    const auto t = r.t;
+    sim.restore_edge(e);
+    for (int q : t) stamps.mark(q);
+    ++done;
+  }
+  return done;
+}
+
+}  // namespace crumple::fast

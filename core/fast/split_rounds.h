@@ -1,0 +1,51 @@
+// The splits of one topology pass, in parallel rounds with the serial result (docs/DECISIONS.md
+// D13). Acceptance and new ids are decided first, serially in event order: a split is skipped
+// when an earlier accepted split of the pass changed one of its edge's two triangles, and those
+// are still the triangles it had at the start of the pass (a split changes only its own two, and
+// any later split sharing one is skipped). Accepted splits then apply in rounds: a split's round
+// is one more than the last round of an earlier split sharing one of its vertices, so the
+// splits of a round have disjoint vertex sets (hence disjoint edges, triangles and adjacency
+// lists) and run in parallel, while every vertex still receives its edits in event order.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "fast/aligned.h"
+#include "fast/pass_events.h"
+
+namespace crumple::fast {
+
+class FastSimulator;
+
+class SplitRounds {
+ public:
+  /// Room for the per-vertex scratch of a mesh of this many vertex slots.
+  void reserve(std::size_t vertices);
+  /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
+  /// each accepted split changes in `stamps`. Returns the splits applied.
+  int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
+  /// Rounds so far large enough to run as a parallel loop (tests check they happened).
+  std::uint64_t large_rounds() const { return large_rounds_; }
+
+ private:
+  int plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
+  void make_room(FastSimulator& sim);
+  int run_rounds(FastSimulator& sim, int rounds);
+
+  // Per vertex slot, all 0 between passes (reset for the vertices used): no pass clears or
+  // allocates an array the size of the mesh.
+  Array<int> round_last_;   ///< round of the vertex's last split in this pass (0: none)
+  Array<int> spring_adds_;  ///< springs the splits of this pass add at the vertex
+  Array<int> tri_adds_;     ///< triangles the splits of this pass add at the vertex
+  // Per pass, kept so that a pass allocates (and faults in) no memory.
+  std::vector<SplitCandidate> candidates_;   ///< per split event
+  std::vector<SplitPlan> plans_;             ///< accepted splits, in event order
+  std::vector<int> round_of_;                ///< per plan
+  std::vector<int> involved_;                ///< vertices of accepted splits (i, j, l, r), once each
+  std::vector<int> by_round_, start_, fill_; ///< plans sorted by round, each round's first
+  std::vector<std::uint8_t> applied_;        ///< per plan
+  std::uint64_t large_rounds_ = 0;
+};
+
+}  // namespace crumple::fast
