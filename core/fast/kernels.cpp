@@ -20,7 +20,7 @@ namespace crumple::fast {
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
 // whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
 // CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel whose loads are random gathers (of
-// positions: the triangle pass, and the edge pass's fallback): scalar, because Zen 4 executes
+// positions: the triangle pass, the adapt test, and the edge pass's fallback): scalar, because Zen 4 executes
 // vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
 // itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
@@ -334,11 +334,14 @@ void momentum_drift(const Vertices& V, const VertexForces& f, const Float4* g, c
 }
 
 namespace {
+// `sphere` a template parameter: a branch on it inside the loop is control flow that the
+// vectorizer of an AVX2 target cannot turn into selects (its float operations could trap, and
+// AVX2 has no masked ones), so each case gets its own branch-free loop.
+template <bool sphere>
 void advance_body(const StepConstants& c, const float corr[3], const float center[3], float radius,
                   float* __restrict x, float* __restrict y, float* __restrict z, float* __restrict vx,
                   float* __restrict vy, float* __restrict vz, const Float4* __restrict g,
                   const float* __restrict mass, int begin, int end) {
-  const bool sphere = radius > 0;
   // The constants as locals: read through pointers inside the loop they stop it from vectorizing.
   const float h = c.h, c0 = corr[0], c1 = corr[1], c2 = corr[2], s0 = center[0], s1 = center[1], s2 = center[2];
   CRUMPLE_SIMD_LOOP
@@ -346,12 +349,13 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
     const float on = mass[v] > 0 ? 1.0f : 0.0f;
     float ux = on * (g[v].x - c0), uy = on * (g[v].y - c1), uz = on * (g[v].z - c2);
     float px = x[v] + h * ux, py = y[v] + h * uy, pz = z[v] + h * uz;
-    if (sphere) {
+    if constexpr (sphere) {
       // The manipulation sphere (§8): onto the sphere, outward velocity removed.
       const float dx = px - s0, dy = py - s1, dz = pz - s2;
       const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
       const bool out = r > radius;
-      const float inv = r > 0 ? 1.0f / r : 0.0f;
+      // 1/r where r > 0, else 0, with the division unconditional (a conditional one could trap).
+      const float inv = (r > 0 ? 1.0f : 0.0f) * (1.0f / (r > 0 ? r : 1.0f));
       const float nx = dx * inv, ny = dy * inv, nz = dz * inv;
       px = out ? s0 + radius * nx : px;
       py = out ? s1 + radius * ny : py;
@@ -374,32 +378,37 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
 
 void advance(const Float4* g, const StepConstants& c, const float corr[3], const float center[3], float radius,
              Vertices& V, int begin, int end) {
-  advance_body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), g,
-               V.m.data(), begin, end);
+  auto run = [&](auto body) {
+    body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), g,
+         V.m.data(), begin, end);
+  };
+  if (radius > 0) run(advance_body<true>);
+  else run(advance_body<false>);
 }
 
 namespace {
-// [Eq 6] and [Eq 10] for every edge, branch-free so that it vectorizes. Fracture of a mesh edge:
-// P = 1/4 c (1 - phi n_ij)(1 + phi n_rl) with c = 1 - lt/l0, made per step by
-// P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the edge's counter-based random
-// number. Restoration of an auxiliary edge: its crease (wings l, r of its split) is bent
-// across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so P_step = P (no pow): that
-// instance (one step per frame, the default) vectorizes; with substeps, the pow keeps the loop
-// scalar (GCC has no vector powf without -ffast-math).
+// [Eq 6] and [Eq 10] for every edge. Fracture of a mesh edge: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl)
+// with c = 1 - lt/l0, made per step by P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the
+// edge's counter-based random number. Restoration of an auxiliary edge: its crease (wings l, r
+// of its split) is bent across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so
+// P_step = P (no pow). Scalar on purpose, as the triangle pass: its loads are random gathers of
+// four vertices' positions and normals, and an eight-lane version of it measured slower
+// (docs/PERFORMANCE.md); whether GCC vectorizes the loop at all depends on the target (it needs
+// AVX-512's masked operations and gathers), so one scalar loop keeps every machine on the same
+// code.
 template <bool exact_step>
-void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const std::int32_t* __restrict B,
-                const std::int32_t* __restrict WL, const std::int32_t* __restrict WR,
-                const float* __restrict l0, const std::uint8_t* __restrict flags,
-                const std::int32_t* __restrict record, const std::int32_t* __restrict lid,
-                const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                const float* __restrict nx, const float* __restrict ny, const float* __restrict nz,
-                std::uint8_t* __restrict out, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A,
+                                      const std::int32_t* __restrict B, const std::int32_t* __restrict WL,
+                                      const std::int32_t* __restrict WR, const float* __restrict l0,
+                                      const std::uint8_t* __restrict flags, const std::int32_t* __restrict record,
+                                      const std::int32_t* __restrict lid, const float* __restrict x,
+                                      const float* __restrict y, const float* __restrict z,
+                                      const float* __restrict nx, const float* __restrict ny,
+                                      const float* __restrict nz, std::uint8_t* __restrict out, int begin, int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
-  // The constants as locals: read through c inside the loop they stop it from vectorizing.
   const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent,
               budget = c.budget, unit = c.unit;
   const bool fracture = c.fracture, restoration = c.restoration;
-  CRUMPLE_SIMD_LOOP
   for (int e = begin; e < end; ++e) {
     const int a = A[e], b = B[e];
     const int l = WL[e] & ~(WL[e] >> 31), r = WR[e] & ~(WR[e] >> 31);  // -1 -> 0, masked below
@@ -415,10 +424,9 @@ void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const
     const float nrl = two_wings ? dot_rl : 1.0f;  // a conditional load is control flow to GCC
     const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
     // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
-    // [0, 1), decides the same for P and its clamp (NaN too), and any clamp (fmin/fmax calls, or
-    // selects, which GCC 12 turns into branches) keeps this loop from vectorizing. The budget's
-    // factor (D22, in [0, 1]) keeps that true: P <= 1 up to round-off (c <= 1, each bracket <= 2),
-    // and a factor of exactly 1 changes no bit.
+    // [0, 1), decides the same for P and its clamp (NaN too). The budget's factor (D22, in
+    // [0, 1]) keeps that true: P <= 1 up to round-off (c <= 1, each bracket <= 2), and a factor
+    // of exactly 1 changes no bit.
     const float Pstep = budget * (exact_step ? P : 1.0f - std::pow(1.0f - std::fmin(std::fmax(P, 0.0f), 1.0f), exponent));
     // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
@@ -427,7 +435,7 @@ void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A, const
     const bool can = fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= floor_length) & (lt < rest);
     const bool breaks = can & (Pstep > 0) & (u < Pstep);
     const bool restores = restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
-    out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0 (no selects: see P)
+    out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0
   }
 }
 }  // namespace
