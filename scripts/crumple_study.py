@@ -202,10 +202,16 @@ ERROR_STATS = ["splits", "restores", "vertices", "radius_norm", "crease_norm", "
 C = f"{DEFAULT_C:.6g}"
 # The command's default (D28) spelled out over the --paper base that crumple_stats runs from.
 DEFAULT_MAX_STEP = 1.0 / 3840
-DEFAULT_OPTIONS = ["--integrator", "explicit", "--viscosity", C, "--substeps", "auto", "--max-step",
-                   f"{DEFAULT_MAX_STEP:.9g}", "--adapt", "frame", "--adapt-every", f"{1 / 240:.9g}"]
+
+
+def default_options(max_step):
+    return ["--integrator", "explicit", "--viscosity", C, "--substeps", "auto", "--max-step", f"{max_step:.9g}",
+            "--adapt", "frame", "--adapt-every", f"{1 / 240:.9g}"]
+
+
+DEFAULT_OPTIONS = default_options(DEFAULT_MAX_STEP)
 # The same with half the step (128 a frame at kappa 1e4): what halving the default's step buys.
-DEFAULT_FINE_OPTIONS = [f"{DEFAULT_MAX_STEP / 2:.9g}" if o == f"{DEFAULT_MAX_STEP:.9g}" else o for o in DEFAULT_OPTIONS]
+DEFAULT_FINE_OPTIONS = default_options(DEFAULT_MAX_STEP / 2)
 # name -> (crumple options, backend, substep settings); every method but "paper" and "undamped"
 # carries the default viscosity c (D17).
 METHODS = {

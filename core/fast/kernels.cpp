@@ -20,8 +20,8 @@ namespace crumple::fast {
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
 // whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
 // CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel whose loads are random gathers (of
-// positions: the triangle pass, the adapt test, and the edge pass's fallback): scalar, because Zen 4 executes
-// vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
+// positions: the triangle pass, the adapt test, and the edge pass's fallback): scalar, because
+// Zen 4 executes vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
 // itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
@@ -420,8 +420,8 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const std::int32_
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = l0[e] * unit;
     const float comp = 1.0f - lt / rest;
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
-    const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // loaded unconditionally:
-    const float nrl = two_wings ? dot_rl : 1.0f;  // a conditional load is control flow to GCC
+    const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // l, r are 0 without wings
+    const float nrl = two_wings ? dot_rl : 1.0f;
     const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
     // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
     // [0, 1), decides the same for P and its clamp (NaN too). The budget's factor (D22, in
