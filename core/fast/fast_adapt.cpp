@@ -165,6 +165,7 @@ StepEvents FastSimulator::adapt() {
     PassTimer t(pass_seconds_, int(Pass::TopologyApply));
     ev = adapt_apply();
   }
+  if (ev.splits > 0 || ev.restores > 0) colors_.invalidate();
   return ev;
 }
 
@@ -207,6 +208,7 @@ bool FastSimulator::split(int id) {
   if (id < 0 || id >= topo_.E.size()) return false;
   compute_normals();
   normals_valid_ = false;
+  colors_.invalidate();
   return split_edge(topo_.E.phys[id]);
 }
 
@@ -215,6 +217,7 @@ bool FastSimulator::restore(int id) {
   const int e = topo_.E.phys[id];
   if (!can_restore(e)) return false;
   normals_valid_ = false;
+  colors_.invalidate();
   restore_edge(e);
   return true;
 }

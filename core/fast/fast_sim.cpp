@@ -30,10 +30,6 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
     : params_(params), scene_(make_scene(input, params)), par_(threads) {
   if (params_.integrator == Integrator::Implicit)
     throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
-  if (params_.integrator == Integrator::Xpbd)
-    throw std::invalid_argument("the fast backend has no XPBD integrator yet; use --backend reference");
-  if (params_.integrator == Integrator::Approx && params_.jacobian == Jacobian::Axial)
-    throw std::invalid_argument("the fast backend has no axial Jacobian yet; use --backend reference");
   const int nv = int(input.positions.size());
   const std::size_t nt = input.triangles.size();
   // Refinement grows a mesh about 4x at the default floor: room for that up front.
@@ -77,11 +73,17 @@ StepConstants FastSimulator::step_constants() const {
   StepConstants c;
   c.h = float(params_.h());
   c.h2 = c.h * c.h;
-  c.kappa = float(params_.kappa);
+  // XPBD's springs are constraints (integrate_xpbd), not forces of the edge pass.
+  const bool xpbd = params_.integrator == Integrator::Xpbd;
+  c.kappa = xpbd ? 0.0f : float(params_.kappa);
   const double h = params_.h(), stiff = params_.integrator == Integrator::Approx ? h * h * params_.kappa : 0.0;
   c.implicit = float(stiff + h * params_.viscosity);
+  if (axial()) {
+    c.axial = float(h * h * params_.kappa);
+    c.viscous = float(h * params_.viscosity);
+  }
   c.bend = float(params_.bend);
-  c.damping = float(params_.damping);
+  c.damping = xpbd ? 0.0f : float(params_.damping);
   c.gravity = float(params_.gravity);
   c.balanced = params_.bending == BendingForm::Balanced;
   c.bounded = params_.predictor == Predictor::Bounded;
@@ -129,25 +131,39 @@ void FastSimulator::compute_forces() {
   gather_pass(c);
 }
 
+void FastSimulator::pin_guesses() {
+  for (int k : scene_.pinned) step_.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
+}
+
 void FastSimulator::integrate() {
   PassTimer timer(pass_seconds_, int(Pass::Integrate));
+  if (params_.integrator == Integrator::Xpbd) return integrate_xpbd();
   const StepConstants c = step_constants();
   const int n = topo_.V.size();
   step_.fit(topo_);  // a no-op after the force passes; run_pass may time this pass alone
   float corr[3] = {0, 0, 0};
-  auto pin = [&] {  // pinned vertices (hang scene) are fixed neighbours in every sweep
-    for (int k : scene_.pinned) step_.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
-  };
+  auto pin = [&] { pin_guesses(); };  // pinned vertices (hang scene) are fixed neighbours in every sweep
   if (params_.integrator == Integrator::Explicit && params_.viscosity == 0) {
     par_.run_lanes(n, kGrain,
                    [&](int b, int e) { explicit_velocity(topo_.V, step_.forces, c, step_.g.data(), b, e); });
     pin();
   } else {
+    if (axial()) {  // the 3 x 3 rows, and the first guess from them
+      step_.fit_blocks(topo_);
+      par_.run(n, kGrain, [&](int b, int e) {
+        axial_blocks(topo_, step_.rows, step_.forces, c, step_.wsum.data(), step_.g.data(), b, e);
+      });
+    }
     pin();
     for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
       const Float4* g = step_.g.data();
       Float4* g_next = step_.g_next.data();
-      par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
+      if (axial())
+        par_.run(n, kGrain, [&](int b, int e) {
+          axial_sweep(topo_, step_.rows, step_.forces, step_.wsum.data(), c, g, g_next, b, e);
+        });
+      else
+        par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
       step_.g.swap(step_.g_next);
       pin();
     }
@@ -159,6 +175,11 @@ void FastSimulator::integrate() {
         drift);
     for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
   }
+  advance_state(c, corr);
+}
+
+void FastSimulator::advance_state(const StepConstants& c, const float corr[3]) {
+  const int n = topo_.V.size();
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
   const Float4* g = step_.g.data();
@@ -193,6 +214,7 @@ StepEvents FastSimulator::step() {
   if (layout_stale(topo_, layout_fraction_)) {
     PassTimer t(pass_seconds_, int(Pass::Layout));
     relayout(topo_, par_, layout_scratch_);
+    colors_.invalidate();
   }
   ++steps_;
   return ev;
@@ -219,7 +241,10 @@ void FastSimulator::run_pass(Pass p) {
     case Pass::Integrate: integrate(); break;
     case Pass::AdaptTest: adapt_decide(); break;
     case Pass::TopologyApply: adapt(); break;
-    case Pass::Layout: relayout(topo_, par_, layout_scratch_); break;
+    case Pass::Layout:
+      relayout(topo_, par_, layout_scratch_);
+      colors_.invalidate();
+      break;
     case Pass::kCount: break;
   }
 }

@@ -19,6 +19,9 @@
 //              sweep reads one 16-byte value per neighbour and nothing per edge) ->
 //              momentum_drift (fixed-block reduction) -> advance (new v and x, sphere
 //              constraint). Explicit Euler replaces the sweeps by explicit_velocity;
+//              the axial Jacobian replaces them by axial_blocks and axial_sweep (3 x 3 rows);
+//              XPBD (fast_xpbd.cpp) projects the springs as constraints, one colour of
+//              vertex-disjoint springs at a time (constraint_colors.h);
 //              Baraff-Witkin runs on the reference path.
 //   adapt      triangle_areas -> vertex_normals on the new positions -> adapt_test (fracture
 //              [Eq 6] and restoration [Eq 10] decisions per edge, all on that one state) ->
@@ -41,6 +44,7 @@
 #include <array>
 #include <vector>
 
+#include "fast/constraint_colors.h"
 #include "fast/kernels.h"
 #include "fast/layout.h"
 #include "fast/parallel.h"
@@ -109,11 +113,19 @@ class FastSimulator final : public Simulator {
 
  private:
   StepConstants step_constants() const;
+  /// The approximate implicit step with the axial Jacobian (kernels_axial.cpp).
+  bool axial() const { return params_.integrator == Integrator::Approx && params_.jacobian == Jacobian::Axial; }
   void compute_normals();
   void compute_forces();
   void edge_pass(const StepConstants& c);  ///< pack_rows, then edge_forces (both one pass's time)
   void gather_pass(const StepConstants& c);
   void integrate();
+  void pin_guesses();  ///< pinned vertices (hang scene) are fixed neighbours: guess 0
+  /// advance (new v and x, the sphere) from the guesses less the momentum correction, then the pins.
+  void advance_state(const StepConstants& c, const float corr[3]);
+  // XPBD (fast_xpbd.cpp, D19).
+  void integrate_xpbd();
+  void viscous_step(const StepConstants& c);  ///< the viscosity's implicit step, no force
   StepEvents adapt();
   void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
   StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
@@ -165,6 +177,7 @@ class FastSimulator final : public Simulator {
   SplitRounds rounds_;                    ///< the splits' unit, with its scratch
   RestoreWaves waves_;                    ///< the restores' unit, with its scratch
   StepScratch step_;                      ///< the physics step's rows, records, forces and guesses
+  ConstraintColors colors_;               ///< XPBD's projection order (stale after any edit)
   Manipulators manip_;                    ///< the caller's, applied every step
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_edits_ = false;             ///< see set_serial_edits

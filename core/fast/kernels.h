@@ -21,6 +21,9 @@ struct StepConstants {
   float kappa = 0;           ///< stiffness per unit mass [Eq 5]
   float implicit = 0;        ///< w per unit mass: W_e = w (m_a + m_b) I is a spring's block of the
                              ///< implicit velocity step, w = h^2 kappa (approx) + h c (viscosity, D17)
+  float axial = 0;           ///< the axial Jacobian (else 0): h^2 kappa, and a spring's block is
+                             ///< W_e = (m_a + m_b)(axial u u^T + viscous I) in axial_blocks/axial_sweep
+  float viscous = 0;         ///< h c, the viscosity's part of W_e (D17)
   float bend = 0;            ///< bending coefficient per unit mass [Eq 9]
   float damping = 0;         ///< spring-axis damping per unit mass
   float gravity = 0;         ///< acceleration along -z
@@ -53,6 +56,14 @@ void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* rec
 /// One Jacobi sweep of the implicit velocity step (approx, viscosity): reads g, writes g_next. §3
 void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants& c, const Float4* g,
                   Float4* g_next, int begin, int end);
+/// The axial Jacobian (MODEL.md §3): per vertex, W = sum_e W_e over its springs, u along each
+/// spring from the packed positions, into wsum; then the first guess into g as gather_forces
+/// writes it for the isotropic step, with the 3 x 3 rows (reads the forces gather_forces summed).
+void axial_blocks(const Topology& m, const PackedRows& rows, const VertexForces& f, const StepConstants& c,
+                  Block3* wsum, Float4* g, int begin, int end);
+/// One Jacobi sweep with the axial blocks: (m I + W) g_next = m v + h f + sum_e W_e g_o.     §3
+void axial_sweep(const Topology& m, const PackedRows& rows, const VertexForces& f, const Block3* wsum,
+                 const StepConstants& c, const Float4* g, Float4* g_next, int begin, int end);
 /// Symplectic Euler's new velocity into g: v + h f / m.                               §3
 void explicit_velocity(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* g, int begin,
                        int end);
@@ -64,6 +75,29 @@ void momentum_drift(const Vertices& V, const VertexForces& f, const Float4* g, c
 /// then the sphere constraint (radius <= 0: none).                                     §3, §8
 void advance(const Float4* g, const StepConstants& c, const float correction[3], const float center[3],
              float radius, Vertices& V, int begin, int end);
+
+// XPBD with small steps (kernels_xpbd.cpp, D19). Its guess rows hold the displacement of the
+// step (x, y, z) and the inverse mass (w; 0 for a pinned vertex).
+struct XpbdConstants {
+  float kappa = 0;  ///< stiffness per unit mass: the compliance is 1 / (kappa (m_a + m_b)) [Eq 5]
+  float h2 = 0;     ///< h^2
+  float unit = 1;   ///< lengths scaled by it (a power of two, as in triangle_areas)
+};
+/// The viscosity's step alone (D19's operator splitting): the first guess of the implicit
+/// velocity step with W_e = h c_e I and no force but gravity's acceleration in the predictor.
+void viscous_guess(const Topology& m, const PackedRows& rows, const StepConstants& c, Float4* g, int begin, int end);
+/// v = g - correction into V's velocities (live slots; dead ones get 0).
+void take_velocity(const Float4* g, const float correction[3], Vertices& V, int begin, int end);
+/// d = h (v + h f / m) and w = 1 / m (0 for a dead slot) into disp.
+void xpbd_predict(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* disp, int begin,
+                  int end);
+/// Projects the distance constraints of the edge slots slots[begin, end), which share no vertex
+/// (one colour of ConstraintColors): dlambda = -C / (w_a + w_b + alpha~), d_a += w_a dlambda u,
+/// d_b -= w_b dlambda u.
+void xpbd_project(const Edges& E, const PackedRows& rows, const XpbdConstants& c, const std::int32_t* slots,
+                  Float4* disp, int begin, int end);
+/// g = d / h: the step's velocity, which advance() then turns back into x + h v.
+void displacement_to_velocity(float h, Float4* g, int begin, int end);
 
 /// Constants of the fracture and restoration tests.
 struct AdaptConstants {

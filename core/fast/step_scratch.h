@@ -36,6 +36,13 @@ struct VertexForces {
   Array<float> ksum;        ///< sum of W_e over the vertex's springs (the implicit row's diagonal)
 };
 
+/// The symmetric 3 x 3 sum W = sum_e W_e of a vertex's implicit blocks under the axial Jacobian
+/// (axial_blocks), 32 bytes so that a row is one aligned load.
+struct alignas(32) Block3 {
+  float xx = 0, yy = 0, zz = 0, xy = 0, xz = 0, yz = 0;
+  float pad0 = 0, pad1 = 0;
+};
+
 struct StepScratch {
   PackedRows rows;
   Array<EdgeOut> edge_out;  ///< per edge slot: the edge pass's record for the gather
@@ -43,6 +50,8 @@ struct StepScratch {
   Array<Float4> g;          ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
                             ///< what a sweep gathers from each neighbour, in one load
   Array<Float4> g_next;     ///< the next sweep's guess (double buffer)
+  Array<Block3> wsum;       ///< the axial Jacobian's row blocks (sized by fit_blocks only: the
+                            ///< isotropic step keeps its diagonal in forces.ksum)
 
   /// Room for this many slots without reallocating (growth past it is geometric).
   void reserve(std::size_t vertices, std::size_t edges) {
@@ -58,6 +67,11 @@ struct StepScratch {
       for (Array<float>* a : {&forces.fx, &forces.fy, &forces.fz, &forces.ksum}) a->resize(nv), a->keep_warm();
     }
     if (edge_out.size() != ne) edge_out.resize(ne), edge_out.keep_warm();
+  }
+  /// fit, and wsum sized to the vertex slots (the axial Jacobian's step).
+  void fit_blocks(const Topology& m) {
+    fit(m);
+    if (wsum.size() != std::size_t(m.V.size())) wsum.resize(std::size_t(m.V.size())), wsum.keep_warm();
   }
 };
 

@@ -9,7 +9,7 @@ namespace crumple::ref {
 //  1. the viscosity (D17), when on, as its own implicit velocity step: the rows of
 //     solve_rows with W_e = h c_e I and no force (operator splitting: XPBD's constraints act
 //     along springs only, the viscosity across them too);
-//  2. v += h f_ext / m (bending, gravity), x* = x + h v;
+//  2. v += h f_ext / m (bending, gravity, grabs), x* = x + h v;
 //  3. one Gauss-Seidel pass over the springs in ascending edge id, each the distance constraint
 //     C = |x_i - x_j| - l0 with compliance alpha = 1 / kappa_e ([Eq 5]), alpha~ = alpha / h^2,
 //     lambda starting at 0 (one iteration): dlambda = -C / (w_i + w_j + alpha~),
@@ -18,12 +18,15 @@ namespace crumple::ref {
 // Each constraint moves its two ends by opposite impulses, so momentum is conserved exactly.
 void ReferenceSimulator::integrate_xpbd(double h) {
   const size_t n = mesh_.verts.size();
+  // f_ext at the step's start: bending and gravity do not depend on velocities; the caller's
+  // grabs (manipulators.h) do, and act with the velocities the step starts from.
+  std::vector<V3> f = external_forces();
+  add_grab_forces(f);
   if (params_.viscosity > 0) {
     const std::vector<V3> vdamped = solve_rows<double>(h, std::vector<V3>(n, V3::Zero()));
     for (size_t k = 0; k < n; ++k)
       if (mesh_.verts[k].alive) mesh_.verts[k].v = vdamped[k];
   }
-  const std::vector<V3> f = external_forces();
   std::vector<double> w(n, 0.0);
   std::vector<V3> before(n, V3::Zero());
   for (size_t k = 0; k < n; ++k) {

@@ -2,6 +2,8 @@
 // forces and their Jacobian taken from the backend's force hook (the Jacobian by central
 // finite differences, so the analytic one in the code is checked independently).
 #include <Eigen/Dense>
+#include <algorithm>
+#include <set>
 
 #include "support/fixtures.h"
 
@@ -30,12 +32,8 @@ class Integrators : public EachBackend {
     return p;
   }
   InputMesh mesh;
-  /// The fast backend has neither Baraff-Witkin nor the axial Jacobian.
-  bool supports(const Params& p) const {
-    return GetParam() == "reference" ||
-           (p.integrator != Integrator::Implicit && p.integrator != Integrator::Xpbd &&
-            !(p.integrator == Integrator::Approx && p.jacobian == Jacobian::Axial));
-  }
+  /// The fast backend has no Baraff-Witkin.
+  bool supports(const Params& p) const { return GetParam() == "reference" || p.integrator != Integrator::Implicit; }
   /// One step from (x0, v0): the forces at the start, the state before and after.
   struct OneStep {
     std::vector<Vec3d> forces;
@@ -260,10 +258,31 @@ TEST_P(Integrators, PaperStepIsSymplecticEulerWithViscosityHKappa) {
   EXPECT_GT(vmax, 1e-2);
 }
 
+// The order of XPBD's Gauss-Seidel pass (D19): ascending id on the reference; on the fast backend
+// by colour, each spring taking the smallest colour no spring of a smaller id at its endpoints
+// has, then by id (the springs of a colour share no vertex, so their order among themselves
+// does not matter). Computed here from the edge list alone.
+std::vector<int> xpbd_order(const std::string& backend, const std::vector<EdgeView>& edges) {
+  std::vector<int> order(edges.size()), color(edges.size(), -1);
+  for (size_t e = 0; e < edges.size(); ++e) {
+    order[e] = int(e);
+    std::set<int> taken;
+    for (size_t o = 0; o < e; ++o)
+      if (edges[o].a == edges[e].a || edges[o].a == edges[e].b || edges[o].b == edges[e].a || edges[o].b == edges[e].b)
+        taken.insert(color[o]);
+    while (taken.count(color[e] + 1)) ++color[e];
+    ++color[e];
+  }
+  if (backend == "fast") std::stable_sort(order.begin(), order.end(), [&](int p, int q) { return color[p] < color[q]; });
+  return order;
+}
+
 // XPBD with small steps (MODEL.md §3, ref_xpbd.cpp), by hand: v += h f_ext / m, x* = x + h v,
-// one Gauss-Seidel pass over the springs in ascending id with alpha~ = 1 / (kappa_e h^2) and
-// lambda from 0, then v = (x - x_before) / h. Then momentum: sum m v' = sum m v + h sum f_ext.
-TEST_P(Integrators, XpbdProjectsEachSpringOnceInIdOrder) {
+// one Gauss-Seidel pass over the springs in the backend's order (xpbd_order) with
+// alpha~ = 1 / (kappa_e h^2) and lambda from 0, then v = (x - x_before) / h. Then momentum:
+// sum m v' = sum m v + h sum f_ext. On the fast backend the id order instead of the colour order
+// misses by ~1e-2 here (far above its float tolerance), so the test tells the two orders apart.
+TEST_P(Integrators, XpbdProjectsEachSpringOnceInItsOrder) {
   Params p = params(Integrator::Xpbd);
   p.kappa = 3e4;
   if (!supports(p)) GTEST_SKIP() << "no XPBD on this backend";
@@ -280,7 +299,8 @@ TEST_P(Integrators, XpbdProjectsEachSpringOnceInIdOrder) {
     x[k] = v3(x0[k]) + h * v[k];
     p0 += s0.mass[k] * (v3(v0[k]) + h * V3(0, 0, -p.gravity));
   }
-  for (const EdgeView& e : s0.edges) {
+  for (const int id : xpbd_order(GetParam(), s0.edges)) {
+    const EdgeView& e = s0.edges[size_t(id)];
     const double wa = 1 / s0.mass[e.a], wb = 1 / s0.mass[e.b];
     const double kappa_e = p.kappa * (s0.mass[e.a] + s0.mass[e.b]);  // [Eq 5]
     const V3 d = x[e.a] - x[e.b];
@@ -293,7 +313,8 @@ TEST_P(Integrators, XpbdProjectsEachSpringOnceInIdOrder) {
     EXPECT_NEAR((v3(s.velocity[k]) - (x[k] - v3(x0[k])) / h).norm(), 0, tol() / h) << k;
     p1 += s.mass[k] * v3(s.velocity[k]);
   }
-  EXPECT_LT((p1 - p0).norm(), 1e-12);
+  // Exact on the reference; in float each projection's m w differs from 1 by an ulp or so.
+  EXPECT_LT((p1 - p0).norm(), GetParam() == "reference" ? 1e-12 : 1e-6);
 }
 
 // XPBD's compliance is 1 / kappa_e: as h -> 0 it converges to the same motion as symplectic
