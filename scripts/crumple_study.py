@@ -11,6 +11,8 @@ Stages (each writes its part of results/accuracy/crumple/crumple.json and its ch
   pareto     each method and substep count against the converged reference (8 seeds)
   timing     each method's ms per frame on this machine, one run at a time (2 threads on fast)
   framerate  the default configuration at --frame-dt 1/30, 1/60, 1/120, 1/240 (the same 3 s)
+  backends   the methods run on the reference above (axial Jacobian, XPBD) on the fast backend
+             too, the two compared statistic by statistic (N = 32, 8 seeds)
 
 Runs go through scripts/crumple_stats.py, one crumple process per job on one thread (the fast
 backend is bit-identical on any thread count, so statistics do not depend on it; timings here
@@ -286,6 +288,52 @@ def stage_pareto(runner, quick, only=None, fast_only=False):
                       flush=True)
         result[label] = entry
     return result
+
+
+# The methods the study ran on the reference backend that the fast backend has too (D31), run on
+# the fast backend with the same command lines and compared statistic by statistic: the gap of
+# the seed means in standard errors of that gap, sqrt((sd_fast^2 + sd_ref^2) / seeds). Two
+# implementations of one model give gaps of about 1 (a few above 2 among dozens, by chance);
+# a real difference shows as gaps far above 3. (XPBD projects in another order on the fast
+# backend, D31: the same model, another Gauss-Seidel iteration.)
+BACKEND_CASES = {"N32_k1e4": (["--grid", 32], 1e4)}
+
+
+def stage_backends(runner, quick):
+    seeds = list(range(1, 4 if quick else 9))
+    result = {}
+    for label, (mesh, kappa) in BACKEND_CASES.items():
+        rows = {}
+        for name, (opts, backend, settings) in METHODS.items():
+            if backend != "reference" or name == "implicit":  # Baraff-Witkin: reference only
+                continue
+            for S in settings:
+                both = {b: summary(runner.run([["--seed", s, "--backend", b, "--threads", 1, "--kappa", kappa]
+                                               + step_options(S, opts) + opts + mesh for s in seeds]))
+                        for b in ("reference", "fast")}
+                gap = {}
+                for stat in ERROR_STATS:
+                    f, r = both["fast"][stat], both["reference"][stat]
+                    se = np.sqrt(((f["sd"] or 0) ** 2 + (r["sd"] or 0) ** 2) / len(seeds))
+                    gap[stat] = float(abs(f["mean"] - r["mean"]) / se) if se > 0 else 0.0
+                rows[f"{name}/S{S}"] = {"summary": both, "gap": gap, "max_gap": max(gap.values())}
+                print(f"{label} {name} S={S}: largest gap {max(gap.values()):.2f} standard errors "
+                      + " ".join(f"{k}={v:.2f}" for k, v in gap.items()), flush=True)
+        result[label] = rows
+    return result
+
+
+def table_backends(data):
+    lines = ["| case | method | splits ref / fast | vertices ref / fast | radius ref / fast | "
+             "largest gap (standard errors) |", "|---|---|---|---|---|---:|"]
+    for label, rows in data.get("backends", {}).items():
+        for key, row in rows.items():
+            r, f = row["summary"]["reference"], row["summary"]["fast"]
+            cell = lambda s, fmt: (f"{r[s]['mean']:{fmt}} ± {r[s]['sd']:{fmt}} / "
+                                   f"{f[s]['mean']:{fmt}} ± {f[s]['sd']:{fmt}}")
+            lines.append(f"| {label} | {key} | {cell('splits', '.0f')} | {cell('vertices', '.0f')} | "
+                         f"{cell('radius_norm', '.3f')} | {row['max_gap']:.2f} |")
+    return "\n".join(lines)
 
 
 # The cost axis: ms per frame of each method and substep count on the machine at hand, timed in
@@ -570,6 +618,8 @@ def stage_report(_runner, _quick):
         f.write("\n## Calibration of the viscosity\n" + table_calibration(data) + "\n")
         f.write("\n## Error against the converged crumple\n" + table_pareto(data) + "\n")
         f.write("\n## The cheapest configuration within 10 % of converged\n" + table_cheapest(data) + "\n")
+        f.write("\n## The fast backend against the reference, same methods and seeds (seed mean ± spread)\n"
+                + table_backends(data) + "\n")
         f.write("\n## The default at four frame rates (seed mean, against 60 fps: relative and in seed "
                 "spreads)\n" + table_framerate(data) + "\n")
     return data.get("report")
@@ -577,7 +627,7 @@ def stage_report(_runner, _quick):
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "timing", "framerate", "report"])
+    p.add_argument("stage", choices=["calibrate", "converge", "pareto", "backends", "timing", "framerate", "report"])
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--fresh", action="store_true")
@@ -599,6 +649,7 @@ def main(argv=None):
               "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only),
               "timing": lambda: stage_timing(runner, a.quick, a.cases, a.methods),
               "framerate": lambda: stage_framerate(runner, a.quick, a.cases),
+              "backends": lambda: stage_backends(runner, a.quick),
               "calibrate": lambda: stage_calibrate(runner, a.quick, a.sizes, a.substeps)}
     result = stages[a.stage]()
     data = load_result()  # read again: another stage may have saved its part meanwhile

@@ -33,10 +33,12 @@ if [[ $mode == --quick ]]; then
   study calibrate --quick --substeps 64
   study converge --quick
   study pareto --quick --cases N32_k1e4
+  study backends --quick
 else
   study calibrate --sizes 32 --substeps 64
   study calibrate --sizes 64 128 --substeps 16
   study converge
   study pareto
+  study backends
 fi
 study report
