@@ -8,9 +8,8 @@
 namespace crumple::fast {
 
 namespace {
-/// Minimum vertices per parallel chunk: a few shape tests per vertex, as cheap as a force pass's
-/// item, so the same grain as those (fast_sim.cpp).
-constexpr int kGrain = 2048;
+// Its loops use the step's pass grain (parallel.h): a few shape tests per vertex are as cheap as
+// a force pass's item.
 
 /// Spheres then planes, in list order, on the vertex slots [begin, end). Float, like the rest of
 /// the backend; each vertex is independent, so any thread count gives the same bits.
@@ -72,7 +71,7 @@ void FastSimulator::add_grab_forces() {
 
 void FastSimulator::apply_manipulators() {
   if (!manip_.spheres.empty() || !manip_.planes.empty())
-    par_.run(topo_.V.size(), kGrain, [&](int b, int e) { constrain_range(topo_.V, manip_, b, e); });
+    par_.run(topo_.V.size(), kPassGrain, [&](int b, int e) { constrain_range(topo_.V, manip_, b, e); });
   Vertices& V = topo_.V;
   for (const Pin& p : manip_.pins) {
     const int v = live_slot(p.vertex);
@@ -90,7 +89,7 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
   const Vertices& V = topo_.V;
   out.positions.assign(3 * std::size_t(V.size()), 0.0f);
   out.normals.assign(3 * std::size_t(V.size()), 0.0f);
-  par_.run(V.size(), kGrain, [&](int b, int e) {
+  par_.run(V.size(), kPassGrain, [&](int b, int e) {
     for (int id = b; id < e; ++id) {
       const int v = V.phys[id];
       if (!(V.m[v] > 0)) continue;

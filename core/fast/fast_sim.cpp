@@ -10,17 +10,6 @@
 
 namespace crumple::fast {
 
-namespace {
-/// Minimum items per parallel chunk of a per-element pass: large enough that a chunk's
-/// scheduling is small beside its work, small enough that a mid-size sheet gives every thread
-/// several chunks.
-constexpr int kGrain = 2048;
-/// Fixed block of the deterministic reductions: fixed, so the sums do not depend on the thread
-/// count; large, so the serial sum of the block results stays short.
-constexpr int kReduceBlock = 8192;
-
-}  // namespace
-
 const char* to_string(Pass p) {
   static const char* names[] = {"normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply", "layout"};
   return names[int(p)];
@@ -101,23 +90,23 @@ float FastSimulator::length_unit() const {
 void FastSimulator::compute_normals() {
   const float unit = length_unit();
   Float4* area = topo_.T.area.data();
-  par_.run(topo_.T.size(), kGrain, [&](int b, int e) { triangle_areas(topo_, unit, area, b, e); });
+  par_.run(topo_.T.size(), kPassGrain, [&](int b, int e) { triangle_areas(topo_, unit, area, b, e); });
   const NormalsOut n{topo_.V.nx.data(), topo_.V.ny.data(), topo_.V.nz.data()};
-  par_.run(topo_.V.size(), kGrain, [&](int b, int e) { vertex_normals(topo_, n, b, e); });
+  par_.run(topo_.V.size(), kPassGrain, [&](int b, int e) { vertex_normals(topo_, n, b, e); });
 }
 
 void FastSimulator::edge_pass(const StepConstants& c) {
   step_.fit(topo_);
-  par_.run_lanes(topo_.V.size(), kGrain, [&](int b, int e) { pack_rows(topo_.V, step_.rows, b, e); });
+  par_.run_lanes(topo_.V.size(), kPassGrain, [&](int b, int e) { pack_rows(topo_.V, step_.rows, b, e); });
   EdgeOut* out = step_.edge_out.data();
-  par_.run(topo_.E.size(), kGrain, [&](int b, int e) { edge_forces(topo_.E, step_.rows, c, out, b, e); });
+  par_.run(topo_.E.size(), kPassGrain, [&](int b, int e) { edge_forces(topo_.E, step_.rows, c, out, b, e); });
 }
 
 void FastSimulator::gather_pass(const StepConstants& c) {
   step_.fit(topo_);  // a no-op after edge_pass; run_pass may time this pass alone
   const EdgeOut* records = step_.edge_out.data();
   Float4* g = step_.g.data();
-  par_.run(topo_.V.size(), kGrain,
+  par_.run(topo_.V.size(), kPassGrain,
            [&](int b, int e) { gather_forces(topo_, step_.rows, records, c, step_.forces, g, b, e); });
 }
 
@@ -142,40 +131,44 @@ void FastSimulator::integrate() {
   const int n = topo_.V.size();
   step_.fit(topo_);  // a no-op after the force passes; run_pass may time this pass alone
   float corr[3] = {0, 0, 0};
-  auto pin = [&] { pin_guesses(); };  // pinned vertices (hang scene) are fixed neighbours in every sweep
   if (params_.integrator == Integrator::Explicit && params_.viscosity == 0) {
-    par_.run_lanes(n, kGrain,
+    par_.run_lanes(n, kPassGrain,
                    [&](int b, int e) { explicit_velocity(topo_.V, step_.forces, c, step_.g.data(), b, e); });
-    pin();
+    pin_guesses();
   } else {
     if (axial()) {  // the 3 x 3 rows, and the first guess from them
       step_.fit_blocks(topo_);
-      par_.run(n, kGrain, [&](int b, int e) {
+      par_.run(n, kPassGrain, [&](int b, int e) {
         axial_blocks(topo_, step_.rows, step_.forces, c, step_.wsum.data(), step_.g.data(), b, e);
       });
     }
-    pin();
-    for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
-      const Float4* g = step_.g.data();
-      Float4* g_next = step_.g_next.data();
-      if (axial())
-        par_.run(n, kGrain, [&](int b, int e) {
-          axial_sweep(topo_, step_.rows, step_.forces, step_.wsum.data(), c, g, g_next, b, e);
-        });
-      else
-        par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
-      step_.g.swap(step_.g_next);
-      pin();
-    }
-    // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
-    double drift[4];  // momentum in 0..2, the total mass in 3
-    const Float4* g = step_.g.data();
-    par_.sum<4>(
-        n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_.V, step_.forces, g, c, b, e, out); },
-        drift);
-    for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
+    sweep_rows(c, corr);
   }
   advance_state(c, corr);
+}
+
+void FastSimulator::sweep_rows(const StepConstants& c, float corr[3]) {
+  const int n = topo_.V.size();
+  pin_guesses();  // pinned vertices (hang scene) are fixed neighbours in every sweep
+  for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
+    const Float4* g = step_.g.data();
+    Float4* g_next = step_.g_next.data();
+    if (axial())
+      par_.run(n, kPassGrain, [&](int b, int e) {
+        axial_sweep(topo_, step_.rows, step_.forces, step_.wsum.data(), c, g, g_next, b, e);
+      });
+    else
+      par_.run(n, kPassGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
+    step_.g.swap(step_.g_next);
+    pin_guesses();
+  }
+  // Remove the net momentum a finite sweep count adds (DECISIONS.md D2).
+  double drift[4];  // momentum in 0..2, the total mass in 3
+  const Float4* g = step_.g.data();
+  par_.sum<4>(
+      n, kReduceBlock, [&](int b, int e, double* out) { momentum_drift(topo_.V, step_.forces, g, c, b, e, out); },
+      drift);
+  for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
 }
 
 void FastSimulator::advance_state(const StepConstants& c, const float corr[3]) {
@@ -183,7 +176,7 @@ void FastSimulator::advance_state(const StepConstants& c, const float corr[3]) {
   const float center[3] = {float(scene_.center[0]), float(scene_.center[1]), float(scene_.center[2])};
   const float radius = scene_.sphere ? float(scene_.sphere_radius(time_ + params_.h())) : 0.0f;
   const Float4* g = step_.g.data();
-  par_.run_lanes(n, kGrain, [&](int b, int e) { advance(g, c, corr, center, radius, topo_.V, b, e); });
+  par_.run_lanes(n, kPassGrain, [&](int b, int e) { advance(g, c, corr, center, radius, topo_.V, b, e); });
   for (int k : scene_.pinned) {  // input vertex k has logical id k
     const int v = topo_.V.phys[k];
     topo_.V.x[v] = float(scene_.position[k][0]), topo_.V.y[v] = float(scene_.position[k][1]);

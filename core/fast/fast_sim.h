@@ -121,6 +121,9 @@ class FastSimulator final : public Simulator {
   void gather_pass(const StepConstants& c);
   void integrate();
   void pin_guesses();  ///< pinned vertices (hang scene) are fixed neighbours: guess 0
+  /// K Jacobi sweeps of the implicit velocity step from the guesses in g (isotropic, or the
+  /// axial rows), then the momentum correction of D2 into corr.
+  void sweep_rows(const StepConstants& c, float corr[3]);
   /// advance (new v and x, the sphere) from the guesses less the momentum correction, then the pins.
   void advance_state(const StepConstants& c, const float corr[3]);
   // XPBD (fast_xpbd.cpp, D19).

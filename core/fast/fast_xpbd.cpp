@@ -2,14 +2,8 @@
 // step (ref_xpbd.cpp) with its Gauss-Seidel pass in colour order (constraint_colors.h) instead
 // of ascending id, so that the springs of one colour run in parallel.
 #include "fast/fast_sim.h"
-#include "fast/pass_timer.h"
 
 namespace crumple::fast {
-
-namespace {
-constexpr int kGrain = 2048;         ///< as fast_sim.cpp's per-element passes
-constexpr int kReduceBlock = 8192;   ///< as fast_sim.cpp's deterministic reductions
-}  // namespace
 
 // The viscosity alone (D17) as its own implicit velocity step, no force (operator splitting,
 // D19): the isotropic rows with W_e = h c_e I (step_constants' implicit for XPBD), swept as
@@ -17,25 +11,13 @@ constexpr int kReduceBlock = 8192;   ///< as fast_sim.cpp's deterministic reduct
 // h f drops out of the rows and of the momentum drift, which is all that h multiplies there.
 void FastSimulator::viscous_step(const StepConstants& c) {
   const int n = topo_.V.size();
-  par_.run(n, kGrain, [&](int b, int e) { viscous_guess(topo_, step_.rows, c, step_.g.data(), b, e); });
-  pin_guesses();
+  par_.run(n, kPassGrain, [&](int b, int e) { viscous_guess(topo_, step_.rows, c, step_.g.data(), b, e); });
   StepConstants rows_only = c;
   rows_only.h = 0;
-  for (int sweep = 0; sweep < params_.sweeps; ++sweep) {
-    const Float4* g = step_.g.data();
-    Float4* g_next = step_.g_next.data();
-    par_.run(n, kGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, rows_only, g, g_next, b, e); });
-    step_.g.swap(step_.g_next);
-    pin_guesses();
-  }
-  double drift[4];  // momentum in 0..2, the total mass in 3 (D2)
-  const Float4* g = step_.g.data();
-  par_.sum<4>(
-      n, kReduceBlock,
-      [&](int b, int e, double* out) { momentum_drift(topo_.V, step_.forces, g, rows_only, b, e, out); }, drift);
   float corr[3];
-  for (int d = 0; d < 3; ++d) corr[d] = scene_.pinned.empty() ? float(drift[d] / drift[3]) : 0.0f;
-  par_.run(n, kGrain, [&](int b, int e) { take_velocity(g, corr, topo_.V, b, e); });
+  sweep_rows(rows_only, corr);
+  const Float4* g = step_.g.data();
+  par_.run(n, kPassGrain, [&](int b, int e) { take_velocity(g, corr, topo_.V, b, e); });
 }
 
 // One step of h: the viscosity, v += h f_ext / m with the displacement d = h v, one projection of
@@ -48,16 +30,16 @@ void FastSimulator::integrate_xpbd() {
   step_.fit(topo_);
   if (params_.viscosity > 0) viscous_step(c);
   Float4* disp = step_.g.data();
-  par_.run(n, kGrain, [&](int b, int e) { xpbd_predict(topo_.V, step_.forces, c, disp, b, e); });
+  par_.run(n, kPassGrain, [&](int b, int e) { xpbd_predict(topo_.V, step_.forces, c, disp, b, e); });
   for (int k : scene_.pinned) disp[topo_.V.phys[k]].w = 0;  // pinned: infinite mass
   colors_.update(topo_);
   const XpbdConstants xc{float(params_.kappa), c.h2, length_unit()};
   for (int color = 0; color < colors_.colors(); ++color) {
     const std::int32_t* slots = colors_.slots(color);
-    par_.run(colors_.count(color), kGrain,
+    par_.run(colors_.count(color), kPassGrain,
              [&](int b, int e) { xpbd_project(topo_.E, step_.rows, xc, slots, disp, b, e); });
   }
-  par_.run(n, kGrain, [&](int b, int e) { displacement_to_velocity(c.h, disp, b, e); });
+  par_.run(n, kPassGrain, [&](int b, int e) { displacement_to_velocity(c.h, disp, b, e); });
   const float none[3] = {0, 0, 0};
   advance_state(c, none);
 }

@@ -31,6 +31,13 @@ namespace crumple::fast {
 /// The grain of a loop over blocks already cut to a chunk's worth of work each (fixed-block
 /// reductions and scans): one block per chunk, so any thread may take any block.
 constexpr int kBlockGrain = 1;
+/// Minimum items per parallel chunk of a per-element pass of the step (forces, sweeps, XPBD's
+/// colours, the manipulators): large enough that a chunk's scheduling is small beside its work,
+/// small enough that a mid-size sheet gives every thread several chunks.
+constexpr int kPassGrain = 2048;
+/// Fixed block of the step's deterministic reductions: fixed, so the sums do not depend on the
+/// thread count; large, so the serial sum of the block results stays short.
+constexpr int kReduceBlock = 8192;
 
 class Parallel {
  public:

@@ -30,8 +30,8 @@ std::vector<Method> methods() {
   return {{"axial", axial}, {"xpbd", xpbd}};
 }
 
-// A 128 x 128 sheet: every per-vertex pass has several chunks of kGrain, and each of XPBD's
-// colours (~5,000 springs) is a parallel loop too. Three frames with fracture on 1, 2 and 4
+// A 128 x 128 sheet: every per-vertex pass has several chunks of kPassGrain, and XPBD's large
+// colours (up to ~8,500 springs of its 14) are parallel loops too. Three frames with fracture on 1, 2 and 4
 // threads. Catches a race in a pass (a colour whose springs share a
 // vertex; a sweep that reads the buffer it writes) or a sum whose order follows the chunks.
 TEST(FastMethods, BitIdenticalOnOneTwoAndFourThreads) {
