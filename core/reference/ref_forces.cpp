@@ -71,9 +71,13 @@ void ReferenceSimulator::add_bending_forces(const std::vector<V3>& n, std::vecto
 std::vector<V3> ReferenceSimulator::external_forces() const {
   std::vector<V3> f(mesh_.verts.size(), V3::Zero());
   add_bending_forces(vertex_normals(), f);
+  add_gravity(f);
+  return f;
+}
+
+void ReferenceSimulator::add_gravity(std::vector<V3>& f) const {
   for (size_t k = 0; k < f.size(); ++k)
     if (mesh_.verts[k].alive) f[k].z() -= mesh_.verts[k].m * params_.gravity;
-  return f;
 }
 
 std::vector<V3> ReferenceSimulator::total_forces() const {

@@ -56,6 +56,8 @@ class ReferenceSimulator final : public Simulator {
   void add_bending_forces(const std::vector<V3>& n, std::vector<V3>& f) const;
   std::vector<V3> external_forces() const;  ///< all but the springs: bending, gravity
   std::vector<V3> total_forces() const;
+  void add_gravity(std::vector<V3>& f) const;
+  void advance_step(std::vector<V3> f);  ///< the step after its forces, up to the adapt pass
   // ref_integrate.cpp, ref_xpbd.cpp
   void integrate(double h, const std::vector<V3>& f);
   template <class Block>
@@ -89,7 +91,7 @@ class ReferenceSimulator final : public Simulator {
   std::vector<std::uint64_t> tri_stamp_;  ///< pass number that last changed each triangle
   std::uint64_t pass_ = 0;                ///< topology passes so far
   Manipulators manip_;                    ///< the caller's, applied every step
-  std::vector<V3> pass_normals_, pass_forces_;  ///< run_pass() state between passes (1-based stamp)
+  std::vector<V3> pass_normals_, pass_forces_;  ///< run_pass() state between passes
 };
 
 }  // namespace crumple::ref
