@@ -11,8 +11,8 @@ Stages (each writes its part of results/accuracy/crumple/crumple.json and its ch
   pareto     each method and substep count against the converged reference (8 seeds)
   timing     each method's ms per frame on this machine, one run at a time (2 threads on fast)
   framerate  the default configuration at --frame-dt 1/30, 1/60, 1/120, 1/240 (the same 3 s)
-  backends   the methods run on the reference above (axial Jacobian, XPBD) on the fast backend
-             too, the two compared statistic by statistic (N = 32, 8 seeds)
+  backends   the methods both backends have beyond the paper's (axial Jacobian, XPBD) run on
+             each, the two compared statistic by statistic (N = 32, 8 seeds)
 
 Runs go through scripts/crumple_stats.py, one crumple process per job on one thread (the fast
 backend is bit-identical on any thread count, so statistics do not depend on it; timings here
@@ -109,8 +109,31 @@ def load_result():
 
 def save_result(data):
     os.makedirs(OUT, exist_ok=True)
-    with open(os.path.join(OUT, "crumple.json"), "w") as f:
+    path = os.path.join(OUT, "crumple.json")
+    with open(path + ".tmp", "w") as f:
         json.dump(data, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
+# Each stage returns only what it ran; merge_result puts it into crumple.json case by case (a
+# stage re-run for some cases keeps the others, and stages run side by side keep each other's),
+# under a lock. The stages whose cases sit one level down name that level here.
+NESTED = {"calibrate": "sizes", "converge": "cases", "framerate": "sizes"}
+
+
+def merge_result(stage, result):
+    import fcntl
+    os.makedirs(OUT, exist_ok=True)
+    with open(os.path.join(OUT, "crumple.json.lock"), "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        data = load_result()
+        old = data.get(stage, {})
+        merged = {**old, **result}
+        key = NESTED.get(stage)
+        if key:
+            merged[key] = {**old.get(key, {}), **result.get(key, {})}
+        data[stage] = merged
+        save_result(data)
 
 
 CALIBRATE_C = [60, 90, 120, KAPPA_H_REF, 250, 350]
@@ -120,8 +143,7 @@ def stage_calibrate(runner, quick, sizes=None, substeps=64):
     sizes = sizes or ([32] if quick else [32, 64])
     seeds = range(1, 3 if quick else 5)
     cs = CALIBRATE_C
-    result = load_result().get("calibrate", {})
-    result.setdefault("sizes", {})
+    result = {"sizes": {}}
     for n in sizes:
         groups = [("paper", [paper(n, s) for s in seeds])]
         groups += [(f"{c:g}", [viscous(n, s, c, substeps) for s in seeds]) for c in cs]
@@ -160,8 +182,9 @@ CONVERGE_CASES = [
     ("N64_k1e4", ["--grid", 64], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256], 32),
     ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256),
     ("N32_k1e5", ["--grid", 32], 1e5, [8, 16, 32, 64, 128, 256], 64),
-    ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128], 64),
-    ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128], 64),
+    ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128, 256, 512], 64),
+    ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128, 256, 512], 64),
+    ("N256_k1e4", ["--grid", 256], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256),
     ("woody_k1e4", WOODY, 1e4, [1, 2, 4, 8, 16, 32, 64], 32),
 ]
 
@@ -174,7 +197,7 @@ def moved_within_spread(a, b):
 def stage_converge(runner, quick, only=None):
     seeds = range(1, 4 if quick else 9)
     cases = CONVERGE_CASES[:1] if quick else [c for c in CONVERGE_CASES if not only or c[0] in only]
-    result = load_result().get("converge", {"viscosity": DEFAULT_C, "seeds": len(seeds), "cases": {}})
+    result = {"viscosity": DEFAULT_C, "seeds": len(seeds), "cases": {}}
     for label, mesh, kappa, levels, finest in cases:
         entry = {"kappa": kappa, "levels": {}, "converged_at": None}
         prev = None
@@ -222,10 +245,10 @@ METHODS = {
     # the same with fracture and restoration once per frame (D27): the substeps cost physics only
     "explicit-F": (["--integrator", "explicit", "--viscosity", C, "--adapt", "frame"], "fast", [4, 8, 16, 32, 64]),
     "approx-K1": (["--integrator", "approx", "--viscosity", C], "fast", [1, 2, 4]),
-    "axial-K1": (["--integrator", "approx", "--jacobian", "axial", "--viscosity", C], "reference", [1, 2, 4, 8]),
-    "axial-K4": (["--integrator", "approx", "--jacobian", "axial", "--sweeps", 4, "--viscosity", C], "reference",
+    "axial-K1": (["--integrator", "approx", "--jacobian", "axial", "--viscosity", C], "fast", [1, 2, 4, 8]),
+    "axial-K4": (["--integrator", "approx", "--jacobian", "axial", "--sweeps", 4, "--viscosity", C], "fast",
                  [1, 2, 4]),
-    "xpbd": (["--integrator", "xpbd", "--viscosity", C], "reference", [4, 8, 16, 32]),
+    "xpbd": (["--integrator", "xpbd", "--viscosity", C], "fast", [4, 8, 16, 32]),
     "implicit": (["--integrator", "implicit", "--cg-tolerance", "1e-4", "--viscosity", C], "reference", [1, 2, 4]),
     "undamped": (["--integrator", "explicit"], "fast", [16]),
     # the command's default (D28): its own substeps (64 a frame at kappa 1e4), the pass at 240 Hz
@@ -259,7 +282,7 @@ def errors(summ, ref):
 
 def stage_pareto(runner, quick, only=None, fast_only=False):
     seeds = range(1, 4 if quick else 9)
-    result = load_result().get("pareto", {})
+    result = {}
     for label, (mesh, kappa) in PARETO_CASES.items():
         if only and label not in only:
             continue
@@ -297,6 +320,7 @@ def stage_pareto(runner, quick, only=None, fast_only=False):
 # a real difference shows as gaps far above 3. (XPBD projects in another order on the fast
 # backend, D31: the same model, another Gauss-Seidel iteration.)
 BACKEND_CASES = {"N32_k1e4": (["--grid", 32], 1e4)}
+BACKEND_METHODS = ["axial-K1", "axial-K4", "xpbd"]  # Baraff-Witkin ("implicit") is reference-only
 
 
 def stage_backends(runner, quick):
@@ -304,9 +328,8 @@ def stage_backends(runner, quick):
     result = {}
     for label, (mesh, kappa) in BACKEND_CASES.items():
         rows = {}
-        for name, (opts, backend, settings) in METHODS.items():
-            if backend != "reference" or name == "implicit":  # Baraff-Witkin: reference only
-                continue
+        for name in BACKEND_METHODS:
+            opts, _, settings = METHODS[name]
             for S in settings:
                 both = {b: summary(runner.run([["--seed", s, "--backend", b, "--threads", 1, "--kappa", kappa]
                                                + step_options(S, opts) + opts + mesh for s in seeds]))
@@ -366,10 +389,9 @@ def stage_timing(_runner, quick, only=None, methods=None):
     import accuracy_common as ac
     rng = random.Random(12)
     sizes = {32: 1} if quick else {n: r for n, r in TIMING_SIZES.items() if not only or f"N{n}" in only}
-    result = load_result().get("timing", {})
     commit = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
                             text=True).stdout.strip()
-    result.update({"machine": ac.cpu_model(), "commit": commit, "exe": crumple_stats.EXE})
+    result = {"machine": ac.cpu_model(), "commit": commit, "exe": crumple_stats.EXE}
     for n, rounds in sizes.items():
         configs = {k: v for k, v in timing_configs(n) if not methods or k.split("/")[0] in methods}
         times = {k: [] for k in configs}
@@ -384,12 +406,11 @@ def stage_timing(_runner, quick, only=None, methods=None):
                 print(f"  N={n} round {r + 1}/{len(schedule)} [{i + 1}/{len(order)}] {key}: "
                       + (f"{out['ms_frame_mean']:.2f} ms/frame" if out["exit"] == 0 else f"exit {out['exit']}"),
                       file=sys.stderr, flush=True)
-        result.setdefault(f"N{n}", {}).update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
-                                                   "args": [str(a) for a in configs[k]], "commit": commit}
-                                               for k, v in times.items()})
-        data = load_result()  # saved per size: a long stage keeps what it measured
-        data["timing"] = result
-        save_result(data)
+        size = load_result().get("timing", {}).get(f"N{n}", {})  # --methods: the others keep theirs
+        size.update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
+                         "args": [str(a) for a in configs[k]], "commit": commit} for k, v in times.items()})
+        result[f"N{n}"] = size
+        merge_result("timing", result)  # saved per size: a long stage keeps what it measured
     return result
 
 
@@ -652,9 +673,7 @@ def main(argv=None):
               "backends": lambda: stage_backends(runner, a.quick),
               "calibrate": lambda: stage_calibrate(runner, a.quick, a.sizes, a.substeps)}
     result = stages[a.stage]()
-    data = load_result()  # read again: another stage may have saved its part meanwhile
-    data[a.stage] = result
-    save_result(data)
+    merge_result(a.stage, result)
 
 if __name__ == "__main__":
     main()
