@@ -376,20 +376,28 @@ def table_backends(data):
 # The cost axis: ms per frame of each method and substep count on the machine at hand, timed in
 # its own stage (never from runs.json, whose runs share the machine two at a time). Fast methods
 # run on 2 threads (the product's configuration); a method with only a reference implementation
-# runs there, on its one thread. Sizes -> rounds of every configuration, interleaved in a
-# shuffled order per round so a slow phase of a shared machine hits all alike.
-TIMING_SIZES = {64: 3, 128: 3, 256: 2}
+# runs there, on its one thread. Cases (keyed as in crumple.json's timing) -> grid size, kappa
+# and rounds of every configuration, interleaved in a shuffled order per round so a slow phase of
+# a shared machine hits all alike. kappa changes the cost (the default's substeps follow the
+# stiffness, the crumple's events follow the model), so each stiffness is timed on its own.
+TIMING_CASES = {"N64": (64, 1e4, 3), "N128": (128, 1e4, 3), "N256": (256, 1e4, 2),
+                "N64_k1e5": (64, 1e5, 3), "N128_k1e5": (128, 1e5, 3)}
 TIMING_SEED = 1
 
 
-def timing_configs(n):
+def timing_key(label):
+    """The timing case of a pareto case: N64_k1e4 -> N64, N64_k1e5 -> N64_k1e5."""
+    return label.split("_")[0] if label.endswith("_k1e4") else label
+
+
+def timing_configs(n, kappa):
     for name, (opts, backend, settings) in METHODS.items():
         if not runs_at(name, backend, n):
             continue
         threads = 2 if backend == "fast" else 1
         for S in settings:
             yield f"{name}/S{S}", ["--grid", n, "--seed", TIMING_SEED, "--backend", backend, "--threads",
-                                   threads, "--kappa", 1e4] + step_options(S, opts) + opts
+                                   threads, "--kappa", kappa] + step_options(S, opts) + opts
 
 
 def stage_timing(_runner, quick, only=None, methods=None):
@@ -399,12 +407,12 @@ def stage_timing(_runner, quick, only=None, methods=None):
     import random
     import accuracy_common as ac
     rng = random.Random(12)
-    sizes = {32: 1} if quick else {n: r for n, r in TIMING_SIZES.items() if not only or f"N{n}" in only}
+    cases = {"N32": (32, 1e4, 1)} if quick else {k: c for k, c in TIMING_CASES.items() if not only or k in only}
     commit = subprocess.run(["git", "-C", ROOT, "describe", "--always", "--dirty"], capture_output=True,
                             text=True).stdout.strip()
     result = {"machine": ac.cpu_model(), "commit": commit, "exe": crumple_stats.EXE}
-    for n, rounds in sizes.items():
-        configs = {k: v for k, v in timing_configs(n) if not methods or k.split("/")[0] in methods}
+    for label, (n, kappa, rounds) in cases.items():
+        configs = {k: v for k, v in timing_configs(n, kappa) if not methods or k.split("/")[0] in methods}
         times = {k: [] for k in configs}
         fast = [k for k in configs if "fast" in configs[k]]
         schedule = [rng.sample(fast, len(fast)) for _ in range(rounds)] + [[k for k in configs if k not in fast]]
@@ -414,14 +422,14 @@ def stage_timing(_runner, quick, only=None, methods=None):
                     out = crumple_stats.measure(configs[key], d)
                 if out["exit"] == 0:
                     times[key].append(out["ms_frame_mean"])
-                print(f"  N={n} round {r + 1}/{len(schedule)} [{i + 1}/{len(order)}] {key}: "
+                print(f"  {label} round {r + 1}/{len(schedule)} [{i + 1}/{len(order)}] {key}: "
                       + (f"{out['ms_frame_mean']:.2f} ms/frame" if out["exit"] == 0 else f"exit {out['exit']}"),
                       file=sys.stderr, flush=True)
-        size = load_result().get("timing", {}).get(f"N{n}", {})  # --methods: the others keep theirs
-        size.update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
+        case = load_result().get("timing", {}).get(label, {})  # --methods: the others keep theirs
+        case.update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
                          "args": [str(a) for a in configs[k]], "commit": commit} for k, v in times.items()})
-        result[f"N{n}"] = size
-        merge_result("timing", result)  # saved per size: a long stage keeps what it measured
+        result[label] = case
+        merge_result("timing", result)  # saved per case: a long stage keeps what it measured
     return result
 
 
@@ -497,9 +505,9 @@ def chart_convergence(data, path):
 
 def pareto_points(data, label):
     """(key, method, S, ms per frame, largest error) of each method run at a case that was also
-    timed; the timing of a case is the one of its grid size (kappa does not change the cost)."""
+    timed, in the timing case of the same grid size and kappa."""
     case = data.get("pareto", {}).get(label, {})
-    timing = data.get("timing", {}).get(label.split("_")[0], {})
+    timing = data.get("timing", {}).get(timing_key(label), {})
     out = []
     for key, row in case.get("methods", {}).items():
         ms = timing.get(key, {}).get("ms_frame")
@@ -554,7 +562,7 @@ def chart_pareto(data, label, path):
     ax.set_xlabel("ms per frame (mean of a 3 s crumple; fast backend 2 threads, reference backend 1)")
     ax.set_ylabel("largest relative error of a seed mean")
     t = data.get("timing", {})
-    commits = sorted({str(v.get("commit", t.get("commit"))) for v in t.get(label.split("_")[0], {}).values()})
+    commits = sorted({str(v.get("commit", t.get("commit"))) for v in t.get(timing_key(label), {}).values()})
     ax.set_title(f"crumple {label}: error against the converged crumple (S = {data['pareto'][label]['reference_substeps']}),"
                  f" and cost\n{t.get('machine', '?')}, crumple {' and '.join(commits)}", fontsize=9)
     ax.legend(fontsize=7, loc="lower left")
@@ -667,7 +675,7 @@ def main(argv=None):
                    "last level run in full)")
     p.add_argument("--fast-only", action="store_true", help="pareto: only the methods of the fast backend")
     p.add_argument("--methods", nargs="*", help="timing: only these methods (the others keep their timings)")
-    p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64 ...")
+    p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64, N64_k1e5 ...")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
     a = p.parse_args(argv)

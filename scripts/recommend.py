@@ -45,7 +45,7 @@ def crumple_main(a):
         print(f"recommend: case {label} has no timed configuration (run the study's timing stage)", file=sys.stderr)
         return 2
     ok = sorted((p for p in points if p[4] <= a.error), key=lambda p: p[3])
-    args = {k: row for k, row in data["timing"][label.split("_")[0]].items()}
+    args = {k: row for k, row in data["timing"][crumple_study.timing_key(label)].items()}
 
     def describe(p):
         full = args[p[0]]["args"]  # the timed command line, less its seed, on the study's --paper base
