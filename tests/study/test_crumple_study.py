@@ -1,8 +1,9 @@
 """How the crumple study saves its stages and prices its cases.
 
-A stage run for some cases keeps the cases saved before it: stages are re-run for a few cases at a time and run side by side (a long reference level beside a
-short one), each writing crumple.json when it ends. Catches a save that replaces a stage's whole
-entry with what one run computed: the other run's cases would vanish.
+A stage run for some cases keeps the cases saved before it: stages are re-run for a few cases
+at a time and run side by side (a long reference level beside a short one), each writing
+crumple.json when it ends. Catches a save that replaces a stage's whole entry with what one run
+computed: the other run's cases would vanish.
 """
 import sys
 import tempfile
