@@ -427,7 +427,8 @@ def stage_timing(_runner, quick, only=None, methods=None):
                       file=sys.stderr, flush=True)
         case = load_result().get("timing", {}).get(label, {})  # --methods: the others keep theirs
         case.update({k: {"ms_frame": float(np.median(v)) if v else None, "rounds": v,
-                         "args": [str(a) for a in configs[k]], "commit": commit} for k, v in times.items()})
+                         "args": [str(a) for a in configs[k]], "commit": commit, "machine": result["machine"]}
+                     for k, v in times.items()})
         result[label] = case
         merge_result("timing", result)  # saved per case: a long stage keeps what it measured
     return result
@@ -516,6 +517,15 @@ def pareto_points(data, label):
     return sorted(out, key=lambda p: p[3])
 
 
+def timed_on(data, label):
+    """The machines and commits a case's timings come from (a row without its own, from before
+    rows named them, has the stage's)."""
+    t = data.get("timing", {})
+    rows = t.get(timing_key(label), {}).values()
+    return (sorted({str(v.get("machine", t.get("machine"))) for v in rows}),
+            sorted({str(v.get("commit", t.get("commit"))) for v in rows}))
+
+
 def pareto_front(points):
     """The points no other point beats on both cost and error, cheapest first."""
     front, best = [], float("inf")
@@ -561,10 +571,9 @@ def chart_pareto(data, label, path):
     ax.set_ylim(min(0.01, min(p[4] for p in points) / 1.5), max(p[4] for p in points) * 1.5)
     ax.set_xlabel("ms per frame (mean of a 3 s crumple; fast backend 2 threads, reference backend 1)")
     ax.set_ylabel("largest relative error of a seed mean")
-    t = data.get("timing", {})
-    commits = sorted({str(v.get("commit", t.get("commit"))) for v in t.get(timing_key(label), {}).values()})
+    machines, commits = timed_on(data, label)
     ax.set_title(f"crumple {label}: error against the converged crumple (S = {data['pareto'][label]['reference_substeps']}),"
-                 f" and cost\n{t.get('machine', '?')}, crumple {' and '.join(commits)}", fontsize=9)
+                 f" and cost\n{' and '.join(machines)}, crumple {' and '.join(commits)}", fontsize=9)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=110)

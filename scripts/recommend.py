@@ -46,6 +46,7 @@ def crumple_main(a):
         return 2
     ok = sorted((p for p in points if p[4] <= a.error), key=lambda p: p[3])
     args = {k: row for k, row in data["timing"][crumple_study.timing_key(label)].items()}
+    machines, commits = crumple_study.timed_on(data, label)
 
     def describe(p):
         full = args[p[0]]["args"]  # the timed command line, less its seed, on the study's --paper base
@@ -56,7 +57,7 @@ def crumple_main(a):
     out = {"scene": "crumple", "case": label, "error_budget": a.error,
            "recommendation": describe(ok[0]) if ok else None,
            "alternatives": [describe(p) for p in ok[1:1 + a.alternatives]],
-           "machine": data["timing"].get("machine"), "commit": data["timing"].get("commit")}
+           "machine": " and ".join(machines), "commit": " and ".join(commits)}
     if a.json:
         print(json.dumps(out, indent=1))
         return 0 if ok else 1
