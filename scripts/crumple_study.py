@@ -688,12 +688,12 @@ def main(argv=None):
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
     a = p.parse_args(argv)
-    if not os.path.exists(crumple_stats.EXE):
-        sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
     runner = Runner(a.jobs, a.fresh, a.cached_only)
-    if a.stage == "report":
+    if a.stage == "report":  # tables and charts from crumple.json: no run
         stage_report(runner, a.quick)
         return
+    if not os.path.exists(crumple_stats.EXE):
+        sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
     stages = {"converge": lambda: stage_converge(runner, a.quick, a.cases),
               "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only),
               "timing": lambda: stage_timing(runner, a.quick, a.cases, a.methods),
