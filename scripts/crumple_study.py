@@ -485,8 +485,12 @@ def chart_convergence(data, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     cases = {k: c for k, c in data["converge"]["cases"].items() if c["levels"]}
-    fig, axes = plt.subplots(1, len(cases), figsize=(4.2 * len(cases), 3.8), squeeze=False)
-    for ax, (label, case) in zip(axes[0], cases.items()):
+    cols = min(4, len(cases))
+    rows = (len(cases) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.6 * rows), squeeze=False)
+    for ax in axes.flat[len(cases):]:
+        ax.set_visible(False)
+    for ax, (label, case) in zip(axes.flat, cases.items()):
         levels = sorted(case["levels"], key=int)
         ref = case["levels"][levels[-1]]
         for s in SHOWN:
@@ -498,7 +502,8 @@ def chart_convergence(data, path):
         ax.set_xscale("log", base=2)
         ax.set_title(f"{label} (converged at S={case['converged_at']})", fontsize=9)
         ax.set_xlabel("substeps per 1/60 s frame")
-    axes[0][0].set_ylabel("seed mean / finest level's")
+    for row in axes:
+        row[0].set_ylabel("seed mean / finest level's")
     axes[0][0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
