@@ -21,6 +21,7 @@ only runs what is new; --fresh drops the cache.
 """
 import argparse
 import concurrent.futures as cf
+import contextlib
 import json
 import os
 import subprocess
@@ -80,10 +81,7 @@ class Runner:
 
     def save(self):
         """Merges this process's runs into runs.json under a lock: stages may run side by side."""
-        import fcntl
-        os.makedirs(OUT, exist_ok=True)
-        with open(self.path + ".lock", "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
+        with locked(self.path):
             if os.path.exists(self.path):
                 self.cache = {**json.load(open(self.path)), **self.cache}
             with open(self.path + ".tmp", "w") as f:
@@ -100,6 +98,16 @@ def summary(runs):
         out[s] = {"mean": float(v.mean()) if len(v) else None,
                   "sd": float(v.std(ddof=1)) if len(v) > 1 else None}
     return out
+
+
+@contextlib.contextmanager
+def locked(path):
+    """Holds an exclusive lock beside path (path.lock) while a process reads and rewrites it."""
+    import fcntl
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path + ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        yield
 
 
 def load_result():
@@ -122,10 +130,7 @@ NESTED = {"calibrate": "sizes", "converge": "cases", "framerate": "sizes"}
 
 
 def merge_result(stage, result):
-    import fcntl
-    os.makedirs(OUT, exist_ok=True)
-    with open(os.path.join(OUT, "crumple.json.lock"), "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    with locked(os.path.join(OUT, "crumple.json")):
         data = load_result()
         old = data.get(stage, {})
         merged = {**old, **result}
@@ -276,10 +281,11 @@ def runs_at(name, backend, n):
 
 
 def reference_level(label):
-    """The converged reference of a case: its finest substep level in the converge stage."""
+    """The converged reference of a case: its finest substep level in the converge stage, or
+    None before that stage ran the case."""
     case = load_result().get("converge", {}).get("cases", {}).get(label)
     if not case:
-        sys.exit(f"crumple_study: no converged reference for {label}: run the converge stage first")
+        return None
     finest = max(case["levels"], key=int)
     return int(finest), case["levels"][finest]
 
@@ -297,10 +303,13 @@ def stage_pareto(runner, quick, only=None, fast_only=False):
     for label, (mesh, kappa) in PARETO_CASES.items():
         if only and label not in only:
             continue
-        if not only and label not in load_result().get("converge", {}).get("cases", {}):
+        level = reference_level(label)
+        if level is None:
+            if only:
+                sys.exit(f"crumple_study: no converged reference for {label}: run the converge stage first")
             print(f"{label}: no converged reference yet (converge stage), skipped", flush=True)
             continue
-        ref_s, ref = reference_level(label)
+        ref_s, ref = level
         entry = {"reference_substeps": ref_s, "reference": ref, "methods": {}}
         for name, (opts, backend, settings) in METHODS.items():
             if mesh[0] == "--grid" and not runs_at(name, backend, mesh[1]):
