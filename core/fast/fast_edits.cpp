@@ -17,14 +17,60 @@ struct D3 {
 };
 double norm(const D3& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 
-// Triangle t's corners with `from` replaced by `to`, keeping the rotation.
-std::array<int, 3> replaced(const Triangles& T, int t, int from, int to) {
-  std::array<int, 3> v = T.corners(t);
-  for (int& k : v)
-    if (k == from) k = to;
-  return v;
+// Triangle t's side out of corner v (its edge from v to the next corner), or -1.
+int side_from(const Triangles& T, int t, int v) {
+  const std::array<int, 3> c = T.corners(t), e{T.e0[t], T.e1[t], T.e2[t]};
+  for (int k = 0; k < 3; ++k)
+    if (c[k] == v) return e[k];
+  return -1;
 }
 
+// Triangle t with corner `from` moved to `to`, keeping the rotation: the side into the corner
+// becomes edge `in`, the side out of it edge `out`, the third side stays. Read before detach(t).
+Face moved_corner(const Triangles& T, int t, int from, int to, int in, int out) {
+  Face f{T.corners(t), {T.e0[t], T.e1[t], T.e2[t]}};
+  for (int k = 0; k < 3; ++k)
+    if (f.v[k] == from) f.v[k] = to, f.e[k] = out, f.e[(k + 2) % 3] = in;
+  return f;
+}
+
+// A split's topology (MODEL.md §5): e_ij becomes an auxiliary spring holding the crease at its
+// current length `lt`, with the crease's wings in its wing slots (for [Eq 10]); n joins i, j, l,
+// r by new mesh edges of rest lengths `rest`; (i,j,l) and (j,i,r) become four triangles. Fills
+// rec.t and stores rec; false if a triangle does not link.
+bool relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt, const std::array<float, 4>& rest) {
+  const int e = plan.e, n = plan.n;
+  const int i = m.E.a[e], j = m.E.b[e], l = m.E.wl[e], r = m.E.wr[e], tL = m.E.tri0[e], tR = m.E.tri1[e];
+  // The four triangles' sides, read before detach clears them.
+  const std::array<int, 4>& en = plan.edges;  // e_in, e_nj, e_ln, e_nr
+  Face faces[4];
+  if (tL >= 0) {  // (i,j,l) -> (i,n,l) and (n,j,l)
+    faces[0] = moved_corner(m.T, tL, j, n, en[0], en[2]);
+    faces[1] = {{n, j, l}, {en[1], side_from(m.T, tL, j), en[2]}};
+  }
+  if (tR >= 0) {  // (j,i,r) -> (j,n,r) and (n,i,r)
+    faces[2] = moved_corner(m.T, tR, i, n, en[1], en[3]);
+    faces[3] = {{n, i, r}, {en[0], side_from(m.T, tR, i), en[3]}};
+  }
+  for (int t : {tL, tR})
+    if (t >= 0) m.detach(t);
+  m.E.flags[e] = kAlive;
+  m.E.wl[e] = l;
+  m.E.wr[e] = r;
+  m.E.l0[e] = lt;
+  m.init_edge(en[0], i, n, rest[0]);
+  m.init_edge(en[1], n, j, rest[1]);
+  if (l >= 0) m.init_edge(en[2], l, n, rest[2]);
+  if (r >= 0) m.init_edge(en[3], n, r, rest[3]);
+  if (tL >= 0) rec.t[0] = tL, rec.t[1] = plan.tris[0], m.init_triangle(plan.tris[0]);
+  if (tR >= 0) rec.t[2] = tR, rec.t[3] = plan.tris[1], m.init_triangle(plan.tris[1]);
+  bool ok = true;
+  for (int q = 0; q < 4; ++q)
+    if (rec.t[q] >= 0) ok &= m.attach(rec.t[q], faces[q]);
+  m.records[plan.record] = rec;
+  m.E.record[e] = plan.record;
+  return ok;
+}
 
 bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
   if (t < 0 || t >= T.size() || !T.alive[t]) return false;
@@ -129,36 +175,12 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   V.m[n] = float(mn);
   V.vx[n] = float(pn.x / mn), V.vy[n] = float(pn.y / mn), V.vz[n] = float(pn.z / mn);
   V.nx[n] = float(nu.x), V.ny[n] = float(nu.y), V.nz[n] = float(nu.z);
-  for (int t : {tL, tR})
-    if (t >= 0) m.detach(t);
-  // e_ij becomes an auxiliary spring holding the crease at its current length, with the
-  // crease's wings in its wing slots (for [Eq 10]).
-  m.E.flags[e] = kAlive;
-  m.E.wl[e] = l;
-  m.E.wr[e] = r;
-  m.E.l0[e] = float(lt);
   rec.n = n;
   rec.e = plan.edges;
-  m.init_edge(rec.e[0], i, n, float(l0 / 2));
-  m.init_edge(rec.e[1], n, j, float(l0 / 2));
-  if (l >= 0) m.init_edge(rec.e[2], l, n, float(rest_dist(l)));
-  if (r >= 0) m.init_edge(rec.e[3], n, r, float(rest_dist(r)));
-  if (tL >= 0) rec.t[0] = tL, rec.t[1] = plan.tris[0], m.init_triangle(plan.tris[0]);
-  if (tR >= 0) rec.t[2] = tR, rec.t[3] = plan.tris[1], m.init_triangle(plan.tris[1]);
-  bool ok = true;
-  if (tL >= 0) {
-    const auto v = replaced(m.T, tL, j, n);
-    ok &= m.attach(tL, v[0], v[1], v[2]);
-    ok &= m.attach(rec.t[1], n, j, l);
-  }
-  if (tR >= 0) {
-    const auto v = replaced(m.T, tR, i, n);
-    ok &= m.attach(tR, v[0], v[1], v[2]);
-    ok &= m.attach(rec.t[3], n, i, r);
-  }
-  m.records[plan.record] = rec;
-  m.E.record[e] = plan.record;
-  return ok;
+  const float lt_f = float(lt);
+  const std::array<float, 4> rest{float(l0 / 2), float(l0 / 2), l >= 0 ? float(rest_dist(l)) : 0.0f,
+                                  r >= 0 ? float(rest_dist(r)) : 0.0f};
+  return relink_split(m, plan, rec, lt_f, rest);
 }
 
 bool FastSimulator::can_restore(int e) const {
@@ -222,6 +244,10 @@ Freed FastSimulator::restore_edge_local(int e) {
       V.vz[k] = float(V.vz[k] + mn * vn.z / msum);
     }
   }
+  // (i,n,l) -> (i,j,l) and (j,n,r) -> (j,i,r), their sides read before detach clears them.
+  Face faces[2];
+  if (s.t[0] >= 0) faces[0] = moved_corner(m.T, s.t[0], n, j, e, side_from(m.T, s.t[1], j));
+  if (s.t[2] >= 0) faces[1] = moved_corner(m.T, s.t[2], n, i, e, side_from(m.T, s.t[3], i));
   for (int t : s.t)
     if (t >= 0) m.detach(t);
   Freed freed;
@@ -236,14 +262,8 @@ Freed FastSimulator::restore_edge_local(int e) {
   m.E.l0[e] = float(s.l0);
   m.E.record[e] = -1;
   m.E.wl[e] = m.E.wr[e] = -1;  // attach below links its triangles' wings
-  if (s.t[0] >= 0) {
-    const auto v = replaced(m.T, s.t[0], n, j);
-    m.attach(s.t[0], v[0], v[1], v[2]);
-  }
-  if (s.t[2] >= 0) {
-    const auto v = replaced(m.T, s.t[2], n, i);
-    m.attach(s.t[2], v[0], v[1], v[2]);
-  }
+  if (s.t[0] >= 0) m.attach(s.t[0], faces[0]);
+  if (s.t[2] >= 0) m.attach(s.t[2], faces[1]);
   return freed;
 }
 

@@ -214,21 +214,26 @@ int Topology::mesh_edge(int a, int b) const {
 }
 
 bool Topology::attach(int t, int a, int b, int c) {
-  const int v[3] = {a, b, c};
-  int ids[3];
+  Face f{{a, b, c}, {}};
+  for (int k = 0; k < 3; ++k)
+    if ((f.e[k] = mesh_edge(f.v[k], f.v[(k + 1) % 3])) < 0) return false;
+  return attach(t, f);
+}
+
+bool Topology::attach(int t, const Face& f) {
   for (int k = 0; k < 3; ++k) {
-    const int p = v[k], q = v[(k + 1) % 3], w = v[(k + 2) % 3];
-    const int e = mesh_edge(p, q);
-    if (e < 0) return false;
-    std::int32_t& slot = E.a[e] == p ? E.tri0[e] : E.tri1[e];
+    const int p = f.v[k], q = f.v[(k + 1) % 3], w = f.v[(k + 2) % 3], e = f.e[k];
+    if (e < 0 || !(E.flags[e] & kMesh)) return false;
+    const bool forward = E.a[e] == p && E.b[e] == q;
+    if (!forward && !(E.a[e] == q && E.b[e] == p)) return false;
+    std::int32_t& slot = forward ? E.tri0[e] : E.tri1[e];
     if (slot >= 0) return false;
     slot = t;
-    (E.a[e] == p ? E.wl[e] : E.wr[e]) = w;
-    ids[k] = e;
+    (forward ? E.wl[e] : E.wr[e]) = w;
   }
-  T.v0[t] = a, T.v1[t] = b, T.v2[t] = c;
-  T.e0[t] = ids[0], T.e1[t] = ids[1], T.e2[t] = ids[2];
-  for (int k = 0; k < 3; ++k) list_tri(v[k], (t << 2) | k, ids[(k + 1) % 3]);  // opposite edge
+  T.v0[t] = f.v[0], T.v1[t] = f.v[1], T.v2[t] = f.v[2];
+  T.e0[t] = f.e[0], T.e1[t] = f.e[1], T.e2[t] = f.e[2];
+  for (int k = 0; k < 3; ++k) list_tri(f.v[k], (t << 2) | k, f.e[(k + 1) % 3]);  // opposite edge
   return true;
 }
 

@@ -70,6 +70,13 @@ struct Freed {
   int record = -1;                           ///< the split record
 };
 
+/// A triangle as attach() links it: corners counter-clockwise about the normal, and the mesh
+/// edge of each side, e[k] joining v[k] and v[(k + 1) % 3] (as Triangles' e_k).
+struct Face {
+  std::array<int, 3> v{-1, -1, -1};
+  std::array<int, 3> e{-1, -1, -1};
+};
+
 /// A 3-vector padded to 16 bytes: state that the kernels gather at random (one load, one line).
 struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
@@ -172,8 +179,11 @@ class Topology {
   void free_ids(const Freed& f);
 
   int mesh_edge(int a, int b) const;  ///< live mesh edge joining a and b, or -1
-  /// Sets triangle t to (a, b, c), links its edges' slots and wings and lists t at its corners.
-  /// Returns false if an edge is missing or a slot is taken.
+  /// Sets triangle t to f, links its edges' slots and wings and lists t at its corners.
+  /// Returns false if a side's edge is not a mesh edge joining its corners or its slot is taken.
+  bool attach(int t, const Face& f);
+  /// The same with each side's edge looked up (mesh_edge, a scan of a's list per side): for
+  /// building a mesh; an event knows its edges and names them.
   bool attach(int t, int a, int b, int c);
   void detach(int t);  ///< the inverse of attach (t stays allocated)
 
