@@ -11,7 +11,8 @@ namespace {
 // the formulas below must then be revisited, rather than silently miscount.
 constexpr double kF = 4, kI = 4, kU8 = 1, kU16 = 2;  // float, int32 id, flag byte, list count
 constexpr double kF4 = 16, kOut = 32;                // Float4 (g, area, rows), EdgeOut record
-static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut);
+constexpr double kEdge = 36;                         // EdgeRecord: the edge's topology and l0
+static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut && sizeof(fast::EdgeRecord) == kEdge);
 constexpr double kLine = 64;
 
 /// One vertex's list: its block start and its share of the pool.
@@ -27,12 +28,12 @@ double normals(const LayoutSizes& s) {
   return areas + sums;
 }
 
-// pack_rows: per vertex x, v, m, n in and the rows xm, vm, nr out. Then per edge slot a, b, wl,
-// wr, l0, flags in and the 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its
-// three rows.
+// pack_rows: per vertex x, v, m, n in and the rows xm, vm, nr out. Then per edge slot its
+// record in (a, b, wl, wr, l0, flags read; the record is read whole) and the 32-byte EdgeOut out;
+// per vertex (endpoints and wings, each once) its three rows.
 double edge_forces(const LayoutSizes& s) {
   const double pack = s.vertices * (10 * kF + 3 * kF4);
-  return pack + s.edges * (4 * kI + kF + kU8 + kOut) + s.vertices * 3 * kF4;
+  return pack + s.edges * (kEdge + kOut) + s.vertices * 3 * kF4;
 }
 
 // Per vertex its spring, neighbour and wing rows and both counts, its velocity row and n in, f,
@@ -54,18 +55,19 @@ double integrate(const LayoutSizes& s, int sweeps) {
   return sweeps * sweep + drift + advance;
 }
 
-// The normals on the new positions, then per edge slot a, b, wl, wr, l0, flags, record, lid in
-// and one decision byte out; per vertex x and n once.
+// The normals on the new positions, then per edge slot its record and lid in and one decision
+// byte out; per vertex x and n once.
 double adapt_test(const LayoutSizes& s) {
-  return normals(s) + s.edges * (4 * kI + kF + kU8 + kI + kI + kU8) + s.vertices * 6 * kF;
+  return normals(s) + s.edges * (kEdge + kI + kU8) + s.vertices * 6 * kF;
 }
 
 // Lines of one element's row, each array's entry on its own line (random access in SoA): a
 // vertex's 13 floats x, v, m, n, rest position, its counts (2), rooms (2), lid, phys, and its
-// four adjacency lists (each: block start and block); an edge's 11 arrays; a triangle's 10. The
+// four adjacency lists (each: block start and block); an edge's record (two lines: 36 bytes
+// straddle a line boundary for half the slots), lid and phys; a triangle's 10 arrays. The
 // step's scratch (step_scratch.h) is no part of a row: no event reads or writes it.
 double vertex_lines(const LayoutSizes& s) { return 19 + 2 * list_lines(s.room_e) + 2 * list_lines(s.room_t); }
-constexpr double kEdgeLines = 11, kTriangleLines = 10;
+constexpr double kEdgeLines = 2 + 2, kTriangleLines = 10;
 constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
 
 // One split or restore touches the five vertices n, i, j, l, r, the five edges e, e_in, e_nj,
@@ -84,7 +86,7 @@ double topology_apply(const LayoutSizes& s, double events) {
 // relayout reads every array of every element and writes it permuted: twice the whole state.
 double layout(const LayoutSizes& s) {
   const double vertex = 14 * kF + 2 * kF4 + 3 * kF + 4 * kU16 + 2 * kI + 2 * list_row(s.room_e) + 2 * list_row(s.room_t);
-  const double edge = 6 * kI + kF + kU8 + kI + kOut + 2 * kI;
+  const double edge = kEdge + kOut + 2 * kI;
   const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
 }

@@ -13,9 +13,9 @@ void ConstraintColors::update(const Topology& m) {
   int ncolors = 0;
   for (int id = 0; id < ne; ++id) {
     const int e = E.phys[id];
-    if (!(E.flags[e] & kAlive)) continue;
+    if (!(E[e].flags & kAlive)) continue;
     const std::uint32_t stamp = std::uint32_t(id) + 1;
-    for (const int v : {E.a[e], E.b[e]}) {  // the colours of the springs at v coloured so far
+    for (const int v : {E[e].a, E[e].b}) {  // the colours of the springs at v coloured so far
       const std::int32_t* springs = m.springs_of(v);
       for (int k = 0, n = m.V.n_springs[v]; k < n; ++k) {
         const int c = color_[std::size_t(springs[k] >> 1)];

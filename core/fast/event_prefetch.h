@@ -22,8 +22,8 @@ void prefetch_read(const T* p) {  // for lines it only reads (no claim on other 
 /// The per-edge lines an event on edge e reads first.
 inline void prefetch_edge(const Topology& m, int e) {
   const Edges& E = m.E;
-  prefetch(&E.flags[e]), prefetch(&E.a[e]), prefetch(&E.b[e]), prefetch(&E.wl[e]), prefetch(&E.wr[e]);
-  prefetch(&E.tri0[e]), prefetch(&E.tri1[e]), prefetch(&E.l0[e]), prefetch(&E.record[e]), prefetch(&E.lid[e]);
+  const char* record = reinterpret_cast<const char*>(&E[e]);  // 36 bytes: its first and last line
+  prefetch(record), prefetch(record + sizeof(EdgeRecord) - 1), prefetch(&E.lid[e]);
 }
 inline void prefetch_vertex(const Topology& m, int v) {
   if (v < 0) return;
@@ -41,13 +41,13 @@ inline void prefetch_triangle(const Topology& m, int t) {
 }
 /// Everything a split of e reads (its edge lines must be cached already: prefetch_edge).
 inline void prefetch_split(const Topology& m, int e) {
-  for (int v : {m.E.a[e], m.E.b[e], m.E.wl[e], m.E.wr[e]}) prefetch_vertex(m, v);
-  prefetch_triangle(m, m.E.tri0[e]);
-  prefetch_triangle(m, m.E.tri1[e]);
+  for (int v : {m.E[e].a, m.E[e].b, m.E[e].wl, m.E[e].wr}) prefetch_vertex(m, v);
+  prefetch_triangle(m, m.E[e].tri0);
+  prefetch_triangle(m, m.E[e].tri1);
 }
 /// Everything a restore of e reads (its record must be cached already).
 inline void prefetch_restore(const Topology& m, int e) {
-  const SplitRecord& r = m.records[m.E.record[e]];
+  const SplitRecord& r = m.records[m.E[e].record];
   prefetch_vertex(m, r.n);
   for (int q = 0; q < 4; ++q) {
     prefetch_vertex(m, r.k[q]);

@@ -56,9 +56,9 @@ StepEvents FastSimulator::adapt_apply() {
   // restore makes its auxiliary edge a mesh edge again, and nothing else changes either flag.
   // (A restore may free a candidate that did not split: hence the alive bit in the test.)
   for (int e : splits)
-    if ((topo_.E.flags[e] & (kAlive | kMesh)) == kAlive) ev.split_edges.push_back(topo_.E.lid[e]);
+    if ((topo_.E[e].flags & (kAlive | kMesh)) == kAlive) ev.split_edges.push_back(topo_.E.lid[e]);
   for (int e : events_.restores)
-    if (topo_.E.flags[e] & kMesh) ev.restored_edges.push_back(topo_.E.lid[e]);
+    if (topo_.E[e].flags & kMesh) ev.restored_edges.push_back(topo_.E.lid[e]);
   renew_normals();
   return ev;
 }
@@ -188,18 +188,18 @@ std::vector<Decision> FastSimulator::decide() const {
 double FastSimulator::margin(int e, double budget) const {
   const Vertices& V = topo_.V;
   const Edges& E = topo_.E;
-  const std::uint8_t f = E.flags[e];
+  const std::uint8_t f = E[e].flags;
   auto dot_n = [&](int a, int b) { return double(V.nx[a]) * V.nx[b] + double(V.ny[a]) * V.ny[b] + double(V.nz[a]) * V.nz[b]; };
   if (!(f & kAlive)) return 0;  // a dead slot's indices may be stale
-  const int a = E.a[e], b = E.b[e], l = E.wl[e], r = E.wr[e];
+  const int a = E[e].a, b = E[e].b, l = E[e].wl, r = E[e].wr;
   const double n_rl = (l >= 0 && r >= 0) ? dot_n(r, l) : 1.0;
-  if (!(f & kMesh)) return (params_.restoration && E.record[e] >= 0) ? (1.0 - n_rl) / 2.0 - budget * params_.epsilon : 0;
+  if (!(f & kMesh)) return (params_.restoration && E[e].record >= 0) ? (1.0 - n_rl) / 2.0 - budget * params_.epsilon : 0;
   if (!params_.fracture) return 0;
   const double u = uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::Fracture);
   const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
   const double lt = std::sqrt(dx * dx + dy * dy + dz * dz);
-  if (!(f & kBreakable) || E.l0[e] < scene_.floor_length || !(lt < E.l0[e])) return -u;
-  const double c = 1.0 - lt / E.l0[e];
+  if (!(f & kBreakable) || E[e].l0 < scene_.floor_length || !(lt < E[e].l0)) return -u;
+  const double c = 1.0 - lt / E[e].l0;
   const double P = std::clamp(0.25 * c * (1 - params_.phi * dot_n(a, b)) * (1 + params_.phi * n_rl), 0.0, 1.0);
   return budget * (1.0 - std::pow(1.0 - P, params_.adapt_interval() / kReferenceStep)) - u;
 }

@@ -40,7 +40,7 @@ Face moved_corner(const Triangles& T, int t, int from, int to, int in, int out) 
 // rec.t and stores rec; false if a triangle does not link.
 bool relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt, const std::array<float, 4>& rest) {
   const int e = plan.e, n = plan.n;
-  const int i = m.E.a[e], j = m.E.b[e], l = m.E.wl[e], r = m.E.wr[e], tL = m.E.tri0[e], tR = m.E.tri1[e];
+  const int i = m.E[e].a, j = m.E[e].b, l = m.E[e].wl, r = m.E[e].wr, tL = m.E[e].tri0, tR = m.E[e].tri1;
   // The four triangles' sides, read before detach clears them.
   const std::array<int, 4>& en = plan.edges;  // e_in, e_nj, e_ln, e_nr
   Face faces[4];
@@ -54,10 +54,10 @@ bool relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt
   }
   for (int t : {tL, tR})
     if (t >= 0) m.detach(t);
-  m.E.flags[e] = kAlive;
-  m.E.wl[e] = l;
-  m.E.wr[e] = r;
-  m.E.l0[e] = lt;
+  m.E[e].flags = kAlive;
+  m.E[e].wl = l;
+  m.E[e].wr = r;
+  m.E[e].l0 = lt;
   m.init_edge(en[0], i, n, rest[0]);
   m.init_edge(en[1], n, j, rest[1]);
   if (l >= 0) m.init_edge(en[2], l, n, rest[2]);
@@ -68,7 +68,7 @@ bool relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt
   for (int q = 0; q < 4; ++q)
     if (rec.t[q] >= 0) ok &= m.attach(rec.t[q], faces[q]);
   m.records[plan.record] = rec;
-  m.E.record[e] = plan.record;
+  m.E[e].record = plan.record;
   return ok;
 }
 
@@ -84,10 +84,10 @@ bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
 SplitCandidate FastSimulator::split_candidate(int e) const {
   const Edges& E = topo_.E;
   SplitCandidate c;
-  if (E.flags[e] != (kAlive | kMesh | kBreakable)) return c;
+  if (E[e].flags != (kAlive | kMesh | kBreakable)) return c;
   c.e = e;
-  c.tris = {E.tri0[e], E.tri1[e]};
-  c.ends = {E.a[e], E.b[e], E.wl[e], E.wr[e]};
+  c.tris = {E[e].tri0, E[e].tri1};
+  c.ends = {E[e].a, E[e].b, E[e].wl, E[e].wr};
   c.flat_draw = float(uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::FlatSign));
   return c;
 }
@@ -123,11 +123,11 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   Vertices& V = m.V;
   const int e = plan.e;
   const float flat_draw = plan.flat_draw;
-  const int i = m.E.a[e], j = m.E.b[e], tL = m.E.tri0[e], tR = m.E.tri1[e];
-  const int l = m.E.wl[e], r = m.E.wr[e];
+  const int i = m.E[e].a, j = m.E[e].b, tL = m.E[e].tri0, tR = m.E[e].tri1;
+  const int l = m.E[e].wl, r = m.E[e].wr;
   const D3 xi{V.x[i], V.y[i], V.z[i]}, xj{V.x[j], V.y[j], V.z[j]};
   const D3 d{xj.x - xi.x, xj.y - xi.y, xj.z - xi.z};
-  const double lt = norm(d), l0 = m.E.l0[e];
+  const double lt = norm(d), l0 = m.E[e].l0;
 
   // [Eq 7] x_n = (x_i + x_j)/2 + s theta nu; nu from the adjacent face normals.
   D3 nu;
@@ -185,8 +185,8 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
 
 bool FastSimulator::can_restore(int e) const {
   const Topology& m = topo_;
-  if (e < 0 || e >= m.E.size() || m.E.flags[e] != kAlive || m.E.record[e] < 0) return false;
-  const SplitRecord& s = m.records[m.E.record[e]];
+  if (e < 0 || e >= m.E.size() || m.E[e].flags != kAlive || m.E[e].record < 0) return false;
+  const SplitRecord& s = m.records[m.E[e].record];
   const int i = s.k[0], j = s.k[1], l = s.k[2], r = s.k[3], n = s.n;
   if (!(m.V.m[n] > 0)) return false;
   const int ends[4][2] = {{i, n}, {n, j}, {l, n}, {n, r}};
@@ -194,8 +194,8 @@ bool FastSimulator::can_restore(int e) const {
   for (int q = 0; q < 4; ++q) {
     if (s.k[q] < 0) continue;
     const int id = s.e[q];
-    if (m.E.flags[id] != (kAlive | kMesh | kBreakable)) return false;  // [Eq 10]
-    const int a = m.E.a[id], b = m.E.b[id];
+    if (m.E[id].flags != (kAlive | kMesh | kBreakable)) return false;  // [Eq 10]
+    const int a = m.E[id].a, b = m.E[id].b;
     if (!((a == ends[q][0] && b == ends[q][1]) || (a == ends[q][1] && b == ends[q][0]))) return false;
     ++expected;
   }
@@ -210,7 +210,7 @@ void FastSimulator::restore_edge(int e) { topo_.free_ids(restore_edge_local(e));
 Freed FastSimulator::restore_edge_local(int e) {
   Topology& m = topo_;
   Vertices& V = m.V;
-  const int rid = m.E.record[e];
+  const int rid = m.E[e].record;
   const SplitRecord s = m.records[rid];
   const int i = s.k[0], j = s.k[1], n = s.n;
   const double mn = V.m[n];
@@ -258,10 +258,10 @@ Freed FastSimulator::restore_edge_local(int e) {
   m.release_vertex(n);
   freed.vertex = n;
   freed.record = rid;
-  m.E.flags[e] = kAlive | kMesh | kBreakable;
-  m.E.l0[e] = float(s.l0);
-  m.E.record[e] = -1;
-  m.E.wl[e] = m.E.wr[e] = -1;  // attach below links its triangles' wings
+  m.E[e].flags = kAlive | kMesh | kBreakable;
+  m.E[e].l0 = float(s.l0);
+  m.E[e].record = -1;
+  m.E[e].wl = m.E[e].wr = -1;  // attach below links its triangles' wings
   if (s.t[0] >= 0) m.attach(s.t[0], faces[0]);
   if (s.t[2] >= 0) m.attach(s.t[2], faces[1]);
   return freed;

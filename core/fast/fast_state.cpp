@@ -52,10 +52,10 @@ Totals FastSimulator::totals() const {
       TotalsPart& t = parts[b];
       for (int id = b * kTotalsBlock, last = std::min(ne, id + kTotalsBlock); id < last; ++id) {
         const int e = E.phys[id];
-        if ((E.flags[e] & (kAlive | kMesh)) != (kAlive | kMesh)) continue;
-        const int a = E.a[e], bb = E.b[e];
+        if ((E[e].flags & (kAlive | kMesh)) != (kAlive | kMesh)) continue;
+        const int a = E[e].a, bb = E[e].b;
         const double dx = double(V.x[a]) - V.x[bb], dy = double(V.y[a]) - V.y[bb], dz = double(V.z[a]) - V.z[bb];
-        const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E.l0[e] - 1.0;
+        const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E[e].l0 - 1.0;
         t.max_strain = std::max(t.max_strain, std::abs(strain));
         t.strain2 += strain * strain;
       }
@@ -114,13 +114,13 @@ Snapshot FastSimulator::snapshot() const {
   for (int id = 0; id < topo_.E.size(); ++id) {
     const int e = topo_.E.phys[id];
     EdgeView ev;
-    const std::uint8_t f = topo_.E.flags[e];
+    const std::uint8_t f = topo_.E[e].flags;
     if (f & kAlive) {
-      ev.a = vid(topo_.E.a[e]);
-      ev.b = vid(topo_.E.b[e]);
-      ev.wing_l = (f & kMesh) ? vid(topo_.E.wl[e]) : -1;  // an auxiliary edge keeps its crease's
-      ev.wing_r = (f & kMesh) ? vid(topo_.E.wr[e]) : -1;  // wings there (topology.h), not a triangle's
-      ev.rest = topo_.E.l0[e];
+      ev.a = vid(topo_.E[e].a);
+      ev.b = vid(topo_.E[e].b);
+      ev.wing_l = (f & kMesh) ? vid(topo_.E[e].wl) : -1;  // an auxiliary edge keeps its crease's
+      ev.wing_r = (f & kMesh) ? vid(topo_.E[e].wr) : -1;  // wings there (topology.h), not a triangle's
+      ev.rest = topo_.E[e].l0;
       ev.auxiliary = !(f & kMesh);
       ev.breakable = f & kBreakable;
     }

@@ -122,8 +122,8 @@ struct Stencil {
   float hinge;
 };
 inline Stencil stencil(const Edges& E, int e) {
-  const bool hinge = (E.flags[e] & kMesh) && E.wl[e] >= 0 && E.wr[e] >= 0;
-  return {E.a[e], E.b[e], hinge ? E.wl[e] : E.a[e], hinge ? E.wr[e] : E.a[e], hinge ? 1.0f : 0.0f};
+  const bool hinge = (E[e].flags & kMesh) && E[e].wl >= 0 && E[e].wr >= 0;
+  return {E[e].a, E[e].b, hinge ? E[e].wl : E[e].a, hinge ? E[e].wr : E[e].a, hinge ? 1.0f : 0.0f};
 }
 
 #if CRUMPLE_LANES8
@@ -143,7 +143,7 @@ void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstant
     for (int k = 0; k < 8; ++k) {
       const int e = std::min(e0 + k, end - 1);
       const Stencil q = stencil(E, e);
-      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = E.l0[e];
+      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = E[e].l0;
       dst[k] = e0 + k < end ? &out[e0 + k].fx : &spare[k].fx;
     }
     __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
@@ -193,7 +193,7 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const PackedRows& ro
     const float inv = lt > 0 ? 1.0f / lt : 0.0f;
     const float msum = pa.w + pb.w;
     const float rel = -((vb.x - va.x) * dx + (vb.y - va.y) * dy + (vb.z - va.z) * dz) * inv;
-    const float s = (-c.kappa * (lt - E.l0[e]) - c.damping * rel) * msum * inv;
+    const float s = (-c.kappa * (lt - E[e].l0) - c.damping * rel) * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     const float nrl = nr.x * nl.x + nr.y * nl.y + nr.z * nl.z;
     const float Bmag = (1.0f - nrl) * lt * 0.5f;
@@ -397,10 +397,7 @@ namespace {
 // AVX-512's masked operations and gathers), so one scalar loop keeps every machine on the same
 // code.
 template <bool exact_step>
-CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const std::int32_t* __restrict A,
-                                      const std::int32_t* __restrict B, const std::int32_t* __restrict WL,
-                                      const std::int32_t* __restrict WR, const float* __restrict l0,
-                                      const std::uint8_t* __restrict flags, const std::int32_t* __restrict record,
+CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord* __restrict edges,
                                       const std::int32_t* __restrict lid, const float* __restrict x,
                                       const float* __restrict y, const float* __restrict z,
                                       const float* __restrict nx, const float* __restrict ny,
@@ -410,14 +407,15 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const std::int32_
               budget = c.budget, unit = c.unit;
   const bool fracture = c.fracture, restoration = c.restoration;
   for (int e = begin; e < end; ++e) {
-    const int a = A[e], b = B[e];
-    const int l = WL[e] & ~(WL[e] >> 31), r = WR[e] & ~(WR[e] >> 31);  // -1 -> 0, masked below
-    const bool two_wings = (WL[e] >= 0) & (WR[e] >= 0);
+    const EdgeRecord& E = edges[e];
+    const int a = E.a, b = E.b;
+    const int l = E.wl & ~(E.wl >> 31), r = E.wr & ~(E.wr >> 31);  // -1 -> 0, masked below
+    const bool two_wings = (E.wl >= 0) & (E.wr >= 0);
     // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
     // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
     // every compressed edge broke at once).
     const float dx = (x[a] - x[b]) * unit, dy = (y[a] - y[b]) * unit, dz = (z[a] - z[b]) * unit;
-    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = l0[e] * unit;
+    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = E.l0 * unit;
     const float comp = 1.0f - lt / rest;
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
     const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // l, r are 0 without wings
@@ -432,9 +430,9 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const std::int32_
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = fracture & (flags[e] == (kAlive | kMesh | kBreakable)) & (l0[e] >= floor_length) & (lt < rest);
+    const bool can = fracture & (E.flags == (kAlive | kMesh | kBreakable)) & (E.l0 >= floor_length) & (lt < rest);
     const bool breaks = can & (Pstep > 0) & (u < Pstep);
-    const bool restores = restoration & (flags[e] == kAlive) & (record[e] >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
+    const bool restores = restoration & (E.flags == kAlive) & (E.record >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
     out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0
   }
 }
@@ -444,8 +442,8 @@ void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, i
   const Vertices& V = m.V;
   const Edges& E = m.E;
   auto run = [&](auto body) {
-    body(c, E.a.data(), E.b.data(), E.wl.data(), E.wr.data(), E.l0.data(), E.flags.data(), E.record.data(), E.lid.data(),
-         V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(), out, begin, end);
+    body(c, E.rows.data(), E.lid.data(), V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(),
+         out, begin, end);
   };
   if (c.step_exponent == 1.0f) run(adapt_body<true>);
   else run(adapt_body<false>);

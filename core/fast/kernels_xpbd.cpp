@@ -53,7 +53,7 @@ void xpbd_predict(const Vertices& V, const VertexForces& f, const StepConstants&
 void xpbd_project(const Edges& E, const PackedRows& rows, const XpbdConstants& c, const std::int32_t* slots,
                   Float4* disp, int begin, int end) {
   for (int k = begin; k < end; ++k) {
-    const int e = slots[k], a = E.a[e], b = E.b[e];
+    const int e = slots[k], a = E[e].a, b = E[e].b;
     const Float4 pa = rows.xm[a], pb = rows.xm[b];
     Float4& da = disp[a];
     Float4& db = disp[b];
@@ -66,7 +66,7 @@ void xpbd_project(const Edges& E, const PackedRows& rows, const XpbdConstants& c
     if (!(lt > 0)) continue;
     // C = |x_a - x_b| - l0, alpha~ = 1 / (kappa_e h^2) [Eq 5], one iteration from lambda = 0.
     const float tilde = 1.0f / (c.kappa * (pa.w + pb.w) * c.h2);
-    const float dlambda = -(lt - E.l0[e] * c.unit) / c.unit / (da.w + db.w + tilde);
+    const float dlambda = -(lt - E[e].l0 * c.unit) / c.unit / (da.w + db.w + tilde);
     const float ux = dx / lt, uy = dy / lt, uz = dz / lt;
     da.x += da.w * dlambda * ux, da.y += da.w * dlambda * uy, da.z += da.w * dlambda * uz;
     db.x -= db.w * dlambda * ux, db.y -= db.w * dlambda * uy, db.z -= db.w * dlambda * uz;

@@ -101,6 +101,7 @@ template <> Array<std::int32_t>& spare(LayoutScratch& s) { return s.spare_i; }
 template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
 template <> Array<std::uint16_t>& spare(LayoutScratch& s) { return s.spare_u16; }
 template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
+template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
 
 /// a[new] = f(a[order[new]]): gathered into the spare buffer, which then swaps with a (keeping
 /// a's reserved room).
@@ -219,6 +220,7 @@ LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   copy_warm(spare_u8, o.spare_u8);
   copy_warm(spare_u16, o.spare_u16);
   copy_warm(spare_f4, o.spare_f4);
+  copy_warm(spare_edges, o.spare_edges);
   return *this;
 }
 
@@ -238,7 +240,7 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   const std::vector<int>& vnew = s.vnew;
   s.key.resize(ne);
   par.run(ne, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) s.key[k] = (E.flags[k] & kAlive) ? std::min(vnew[E.a[k]], vnew[E.b[k]]) : nv;
+    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(vnew[E[k].a], vnew[E[k].b]) : nv;
   });
   counting_order(par, s, nv + 1, s.eorder);
   inverse(par, s.eorder, s.enew);
@@ -270,21 +272,13 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
   // itself, as the topology's convention says.
-  const std::uint8_t* old_flags = E.flags.data();
-  auto alive_edge = [&](int k) { return (old_flags[eorder[k]] & kAlive) != 0; };
-  for (Array<std::int32_t>* a : {&E.a, &E.b}) {
-    permute(par, s, *a, eorder, vmap);
-    par.run(ne, kGrain, [&](int b, int e) {
-      for (int k = b; k < e; ++k)
-        if (!alive_edge(k)) (*a)[k] = 0;
-    });
-  }
-  for (Array<std::int32_t>* a : {&E.wl, &E.wr}) permute(par, s, *a, eorder, vmap);
-  for (Array<std::int32_t>* a : {&E.tri0, &E.tri1}) permute(par, s, *a, eorder, tmap);
-  permute(par, s, E.l0, eorder);
-  permute(par, s, E.record, eorder);
+  permute(par, s, E.rows, eorder, [&](EdgeRecord r) {
+    if (r.flags & kAlive) r.a = vmap(r.a), r.b = vmap(r.b);
+    else r.a = r.b = 0;
+    r.wl = vmap(r.wl), r.wr = vmap(r.wr), r.tri0 = tmap(r.tri0), r.tri1 = tmap(r.tri1);
+    return r;
+  });
   permute(par, s, E.lid, eorder);
-  permute(par, s, E.flags, eorder);  // last: the loops above read the old flags
 
   // Triangles (dead ones keep corners 0 and no edges).
   const std::uint8_t* old_alive = T.alive.data();

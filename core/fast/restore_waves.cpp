@@ -55,9 +55,9 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
   candidates_.resize(std::size_t(nr));
   sim.par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
-      if (k + kNear < e) prefetch(&m.records[m.E.record[restores[k + kNear]]]);
+      if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
       const int edge = restores[k];
-      const SplitRecord& r = m.records[m.E.record[edge]];
+      const SplitRecord& r = m.records[m.E[edge].record];
       const Answer answer = any_touched(r, stamps) ? kNever : sim.can_restore(edge) ? kRestorable : kNotNow;
       candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
     }
@@ -76,7 +76,7 @@ void RestoreWaves::scan(FastSimulator& sim, const std::vector<int>& restores, Tr
     const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
     if (!waits) {
       if (first && candidates_[k].answer != kRestorable) continue;
-      if (!first && (any_touched(m.records[m.E.record[e]], stamps) || !sim.can_restore(e))) continue;
+      if (!first && (any_touched(m.records[m.E[e].record], stamps) || !sim.can_restore(e))) continue;
     }
     for (int v : verts)
       if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed_.push_back(v);
@@ -85,7 +85,7 @@ void RestoreWaves::scan(FastSimulator& sim, const std::vector<int>& restores, Tr
       continue;
     }
     wave_.push_back(k);
-    for (int t : m.records[m.E.record[e]].t) stamps.mark(t);
+    for (int t : m.records[m.E[e].record].t) stamps.mark(t);
   }
 }
 

@@ -10,9 +10,9 @@ int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, Tri
   const Topology& m = sim.topo_;
   int done = 0;
   for (int e : splits) {
-    if (stamps.touched(m.E.tri0[e]) || stamps.touched(m.E.tri1[e])) continue;
+    if (stamps.touched(m.E[e].tri0) || stamps.touched(m.E[e].tri1)) continue;
     if (!sim.split_edge(e)) continue;
-    for (int t : m.records[m.E.record[e]].t) stamps.mark(t);
+    for (int t : m.records[m.E[e].record].t) stamps.mark(t);
     ++done;
   }
   return done;
@@ -22,7 +22,7 @@ int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores,
   const Topology& m = sim.topo_;
   int done = 0;
   for (int e : restores) {
-    const SplitRecord& r = m.records[m.E.record[e]];
+    const SplitRecord& r = m.records[m.E[e].record];
     if (std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); }) || !sim.can_restore(e)) continue;
     const auto t = r.t;
     sim.restore_edge(e);

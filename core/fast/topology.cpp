@@ -38,7 +38,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
-  reserve_all(ne, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record, E.lid, E.phys);
+  reserve_all(ne, E.rows, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
   records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
@@ -104,8 +104,7 @@ void Topology::fit() {
     }
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
-  if (const std::size_t n = E.lid.size(); n != E.a.size())
-    grow(n, E.a, E.b, E.wl, E.wr, E.tri0, E.tri1, E.l0, E.flags, E.record);
+  if (const std::size_t n = E.lid.size(); n != E.rows.size()) grow(n, E.rows);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
     grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
 }
@@ -124,22 +123,22 @@ int Topology::new_edge(int a, int b, float l0) {
 }
 
 void Topology::init_edge(int e, int a, int b, float l0) {
-  E.a[e] = a;
-  E.b[e] = b;
-  E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
-  E.l0[e] = l0;
-  E.flags[e] = kAlive | kMesh | kBreakable;
+  E[e].a = a;
+  E[e].b = b;
+  E[e].wl = E[e].wr = E[e].tri0 = E[e].tri1 = E[e].record = -1;
+  E[e].l0 = l0;
+  E[e].flags = kAlive | kMesh | kBreakable;
   list_spring(a, e << 1, b);
   list_spring(b, (e << 1) | 1, a);
 }
 
 void Topology::release_edge(int e) {
-  unlist_spring(E.a[e], e << 1);
-  unlist_spring(E.b[e], (e << 1) | 1);
-  E.a[e] = E.b[e] = 0;
-  E.wl[e] = E.wr[e] = E.tri0[e] = E.tri1[e] = E.record[e] = -1;
-  E.l0[e] = 1;
-  E.flags[e] = 0;
+  unlist_spring(E[e].a, e << 1);
+  unlist_spring(E[e].b, (e << 1) | 1);
+  E[e].a = E[e].b = 0;
+  E[e].wl = E[e].wr = E[e].tri0 = E[e].tri1 = E[e].record = -1;
+  E[e].l0 = 1;
+  E[e].flags = 0;
 }
 
 int Topology::new_triangle() {
@@ -209,7 +208,7 @@ void Topology::move_block(int v, bool springs, int need) {
 int Topology::mesh_edge(int a, int b) const {
   const std::int32_t *s = springs_of(a), *nb = nbrs_of(a);
   for (int k = 0; k < V.n_springs[a]; ++k)
-    if (nb[k] == b && (E.flags[s[k] >> 1] & kMesh)) return s[k] >> 1;
+    if (nb[k] == b && (E[s[k] >> 1].flags & kMesh)) return s[k] >> 1;
   return -1;
 }
 
@@ -223,13 +222,13 @@ bool Topology::attach(int t, int a, int b, int c) {
 bool Topology::attach(int t, const Face& f) {
   for (int k = 0; k < 3; ++k) {
     const int p = f.v[k], q = f.v[(k + 1) % 3], w = f.v[(k + 2) % 3], e = f.e[k];
-    if (e < 0 || !(E.flags[e] & kMesh)) return false;
-    const bool forward = E.a[e] == p && E.b[e] == q;
-    if (!forward && !(E.a[e] == q && E.b[e] == p)) return false;
-    std::int32_t& slot = forward ? E.tri0[e] : E.tri1[e];
+    if (e < 0 || !(E[e].flags & kMesh)) return false;
+    const bool forward = E[e].a == p && E[e].b == q;
+    if (!forward && !(E[e].a == q && E[e].b == p)) return false;
+    std::int32_t& slot = forward ? E[e].tri0 : E[e].tri1;
     if (slot >= 0) return false;
     slot = t;
-    (forward ? E.wl[e] : E.wr[e]) = w;
+    (forward ? E[e].wl : E[e].wr) = w;
   }
   T.v0[t] = f.v[0], T.v1[t] = f.v[1], T.v2[t] = f.v[2];
   T.e0[t] = f.e[0], T.e1[t] = f.e[1], T.e2[t] = f.e[2];
@@ -242,8 +241,8 @@ void Topology::detach(int t) {
   const int es[3] = {T.e0[t], T.e1[t], T.e2[t]};
   for (int e : es) {
     if (e < 0) continue;
-    if (E.tri0[e] == t) E.tri0[e] = E.wl[e] = -1;
-    if (E.tri1[e] == t) E.tri1[e] = E.wr[e] = -1;
+    if (E[e].tri0 == t) E[e].tri0 = E[e].wl = -1;
+    if (E[e].tri1 == t) E[e].tri1 = E[e].wr = -1;
   }
   for (int k = 0; k < 3; ++k) unlist_tri(v[k], (t << 2) | k);
   T.e0[t] = T.e1[t] = T.e2[t] = -1;
@@ -276,10 +275,10 @@ int Topology::live_vertices() const {
   return V.size() - int(V.free_ids.size());
 }
 int Topology::live_mesh_edges() const {
-  return int(std::count_if(E.flags.begin(), E.flags.end(), [](std::uint8_t f) { return (f & (kAlive | kMesh)) == (kAlive | kMesh); }));
+  return int(std::count_if(E.rows.begin(), E.rows.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == (kAlive | kMesh); }));
 }
 int Topology::live_auxiliary() const {
-  return int(std::count_if(E.flags.begin(), E.flags.end(), [](std::uint8_t f) { return (f & (kAlive | kMesh)) == kAlive; }));
+  return int(std::count_if(E.rows.begin(), E.rows.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == kAlive; }));
 }
 int Topology::live_triangles() const { return T.size() - int(T.free_ids.size()); }
 
@@ -329,7 +328,7 @@ std::string Topology::check() const {
     return true;
   };
   if (!bijective(V.lid, V.phys) || V.lid.size() != V.m.size()) return fail("vertex logical ids are not a bijection");
-  if (!bijective(E.lid, E.phys) || E.lid.size() != E.a.size()) return fail("edge logical ids are not a bijection");
+  if (!bijective(E.lid, E.phys) || E.lid.size() != E.rows.size()) return fail("edge logical ids are not a bijection");
   if (!bijective(T.lid, T.phys) || T.lid.size() != T.v0.size()) return fail("triangle logical ids are not a bijection");
   std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
   for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;
@@ -342,11 +341,11 @@ std::string Topology::check() const {
       const int p = v[k], q = v[(k + 1) % 3], e = es[k];
       if (vertex_dead[p]) return fail("triangle ", t, " uses dead vertex ", p);
       if (p == q || p == v[(k + 2) % 3]) return fail("triangle ", t, " repeats vertex ", p);
-      if (e < 0 || !(E.flags[e] & kAlive) || !(E.flags[e] & kMesh)) return fail("triangle ", t, " side ", k, " has no mesh edge");
-      const bool fwd = E.a[e] == p && E.b[e] == q, back = E.a[e] == q && E.b[e] == p;
+      if (e < 0 || !(E[e].flags & kAlive) || !(E[e].flags & kMesh)) return fail("triangle ", t, " side ", k, " has no mesh edge");
+      const bool fwd = E[e].a == p && E[e].b == q, back = E[e].a == q && E[e].b == p;
       if (!fwd && !back) return fail("edge ", e, " does not join triangle ", t, "'s side ", k);
-      if ((fwd ? E.tri0[e] : E.tri1[e]) != t) return fail("edge ", e, " does not link back to triangle ", t);
-      if ((fwd ? E.wl[e] : E.wr[e]) != v[(k + 2) % 3]) return fail("edge ", e, " has a stale wing");
+      if ((fwd ? E[e].tri0 : E[e].tri1) != t) return fail("edge ", e, " does not link back to triangle ", t);
+      if ((fwd ? E[e].wl : E[e].wr) != v[(k + 2) % 3]) return fail("edge ", e, " has a stale wing");
       bool listed = false;
       const std::int32_t *s = tris_of(p), *w = wings_of(p);
       const int opposite = es[(k + 1) % 3];
@@ -356,26 +355,26 @@ std::string Topology::check() const {
   }
   std::set<std::pair<int, int>> pairs;
   for (int e = 0; e < E.size(); ++e) {
-    const std::uint8_t f = E.flags[e];
+    const std::uint8_t f = E[e].flags;
     if (!(f & kAlive)) {
       if (!edge_free[e]) return fail("dead edge ", e, " is not on the free list");
       continue;
     }
-    const int a = E.a[e], b = E.b[e];
+    const int a = E[e].a, b = E[e].b;
     if (a == b || vertex_dead[a] || vertex_dead[b]) return fail("edge ", e, " has a bad endpoint");
-    if (!(E.l0[e] > 0)) return fail("edge ", e, " has rest length ", E.l0[e]);
+    if (!(E[e].l0 > 0)) return fail("edge ", e, " has rest length ", E[e].l0);
     for (int end : {a, b}) {
       const std::int32_t* s = springs_of(end);
       const int want = (e << 1) | (end == b);
       if (std::count(s, s + V.n_springs[end], want) != 1) return fail("edge ", e, " is not listed once at ", end);
     }
     if (!(f & kMesh)) {
-      if ((f & kBreakable) || E.tri0[e] >= 0 || E.tri1[e] >= 0 || E.record[e] < 0)
+      if ((f & kBreakable) || E[e].tri0 >= 0 || E[e].tri1 >= 0 || E[e].record < 0)
         return fail("auxiliary edge ", e, " is breakable, in a triangle or has no record");
       continue;
     }
-    if (E.tri0[e] < 0 && E.tri1[e] < 0) return fail("mesh edge ", e, " is in no triangle");
-    for (int t : {E.tri0[e], E.tri1[e]})
+    if (E[e].tri0 < 0 && E[e].tri1 < 0) return fail("mesh edge ", e, " is in no triangle");
+    for (int t : {E[e].tri0, E[e].tri1})
       if (t >= 0 && !T.alive[t]) return fail("edge ", e, " links dead triangle ", t);
     if (!pairs.insert({std::min(a, b), std::max(a, b)}).second) return fail("two mesh edges join ", a, " and ", b);
   }
@@ -386,7 +385,7 @@ std::string Topology::check() const {
     const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
     for (int k = 0; k < V.n_springs[v]; ++k) {
       const int e = s[k] >> 1;
-      if (!(E.flags[e] & kAlive) || (s[k] & 1 ? E.b[e] : E.a[e]) != v || (s[k] & 1 ? E.a[e] : E.b[e]) != nb[k])
+      if (!(E[e].flags & kAlive) || (s[k] & 1 ? E[e].b : E[e].a) != v || (s[k] & 1 ? E[e].a : E[e].b) != nb[k])
         return fail("vertex ", v, " lists a bad spring");
     }
   }

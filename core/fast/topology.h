@@ -1,9 +1,10 @@
 // The fast backend's mesh: structure-of-arrays topology and state (Jolt's split of immutable-ish
 // topology from per-step state, Box2D's hot/cold split), and the serial topology edits. What
-// only one step's passes read (rows, edge records, forces, guesses) is not here but in
+// only one step's passes read (rows, per-edge outputs, forces, guesses) is not here but in
 // step_scratch.h.
 //
-// Vertices, edges and triangles are *slots* in parallel arrays, and each slot carries a logical
+// Vertices, edges and triangles are *slots* in parallel arrays (an edge's topology in one record
+// per slot, EdgeRecord, which an event reads whole), and each slot carries a logical
 // id (`lid`) with its inverse map (`phys`). Logical ids follow the id policy of sim/simulator.h,
 // identical to the reference's (removed ids on LIFO free lists), so the random stream keyed by
 // edge id gives the same decisions and snapshots list elements in the same order; slots are
@@ -109,20 +110,29 @@ struct Vertices {
   int size() const { return int(m.size()); }
 };
 
+/// One edge slot's topology and rest state in one record (36 bytes): an event reads or writes
+/// an edge in one or two cache lines instead of a line per attribute, and the per-step passes
+/// (edge_forces, adapt_test) read all their per-edge inputs from it.
+struct EdgeRecord {
+  std::int32_t a = 0, b = 0;        ///< endpoints
+  std::int32_t wl = 0, wr = 0;      ///< wings: third vertex of tri0 / tri1 (-1: none); for an
+                                    ///< auxiliary edge, l and r of its split record (the crease's
+                                    ///< wings, which [Eq 10] reads: the test needs no record)
+  std::int32_t tri0 = 0, tri1 = 0;  ///< triangle traversing a->b / b->a (-1: none)
+  float l0 = 0;                     ///< rest length
+  std::int32_t record = 0;          ///< index into Topology::records for auxiliary edges, else -1
+  std::uint8_t flags = 0;           ///< kAlive | kMesh | kBreakable
+};
+
 struct Edges {
-  Array<std::int32_t> a, b;      ///< endpoints
-  Array<std::int32_t> wl, wr;    ///< wings: third vertex of tri0 / tri1 (-1: none); for an
-                                 ///< auxiliary edge, l and r of its split record (the crease's
-                                 ///< wings, which [Eq 10] reads: the test needs no record)
-  Array<std::int32_t> tri0, tri1;///< triangle traversing a->b / b->a (-1: none)
-  Array<float> l0;               ///< rest length
-  Array<std::uint8_t> flags;     ///< kAlive | kMesh | kBreakable
-  Array<std::int32_t> record;    ///< index into Topology::records for auxiliary edges, else -1
+  Array<EdgeRecord> rows;        ///< per slot (a new slot is all zero until init_edge)
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
   Array<std::int32_t> phys;      ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
 
-  int size() const { return int(a.size()); }
+  EdgeRecord& operator[](int e) { return rows[std::size_t(e)]; }
+  const EdgeRecord& operator[](int e) const { return rows[std::size_t(e)]; }
+  int size() const { return int(rows.size()); }
 };
 
 struct Triangles {

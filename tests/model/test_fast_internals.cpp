@@ -142,8 +142,8 @@ double mean_slot_distance(const fast::Topology& m) {
   double sum = 0;
   int n = 0;
   for (int e = 0; e < m.E.size(); ++e) {
-    if (!(m.E.flags[e] & fast::kAlive)) continue;
-    sum += std::abs(m.E.a[e] - m.E.b[e]);
+    if (!(m.E[e].flags & fast::kAlive)) continue;
+    sum += std::abs(m.E[e].a - m.E[e].b);
     ++n;
   }
   return sum / n;

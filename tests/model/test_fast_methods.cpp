@@ -82,20 +82,20 @@ TEST(FastMethods, ConstraintColorsAreGreedyInIdOrder) {
     for (int k = 0; k < colors.count(c); ++k) {
       const int e = colors.slots(c)[k];
       EXPECT_EQ(color[size_t(e)], c);
-      EXPECT_TRUE(ends.insert(m.E.a[e]).second && ends.insert(m.E.b[e]).second) << "colour " << c;
+      EXPECT_TRUE(ends.insert(m.E[e].a).second && ends.insert(m.E[e].b).second) << "colour " << c;
       ++listed;
     }
   }
   int live = 0;
   for (int id = 0; id < m.E.size(); ++id) {
     const int e = m.E.phys[id];
-    if (!(m.E.flags[e] & fast::kAlive)) continue;
+    if (!(m.E[e].flags & fast::kAlive)) continue;
     ++live;
     std::set<int> taken;
     for (int jd = 0; jd < id; ++jd) {
       const int o = m.E.phys[jd];
-      if (!(m.E.flags[o] & fast::kAlive)) continue;
-      if (m.E.a[o] == m.E.a[e] || m.E.a[o] == m.E.b[e] || m.E.b[o] == m.E.a[e] || m.E.b[o] == m.E.b[e])
+      if (!(m.E[o].flags & fast::kAlive)) continue;
+      if (m.E[o].a == m.E[e].a || m.E[o].a == m.E[e].b || m.E[o].b == m.E[e].a || m.E[o].b == m.E[e].b)
         taken.insert(color[size_t(o)]);
     }
     int smallest = 0;
