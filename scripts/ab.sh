@@ -24,7 +24,8 @@ for r in $(seq "$rounds"); do
     bin=$a; [[ $side == B ]] && bin=$b
     echo "ab.sh: round $r/$rounds, $side" >&2
     "$bin" --benchmark_filter="$filter" --benchmark_repetitions="$reps" --benchmark_report_aggregates_only=true \
-      --benchmark_format=json --benchmark_out="$out/$side$r.json" --benchmark_out_format=json > /dev/null
+      --benchmark_format=json --benchmark_out="$out/$side$r.json" --benchmark_out_format=json > /dev/null \
+      || { echo "ab.sh: $bin failed in round $r" >&2; exit 1; }
   done
 done
 /usr/bin/python3 - "$out" "$rounds" "$counter" <<'EOF'

@@ -1,0 +1,96 @@
+"""Tests of scripts/ab.sh (A/B of two benchmark binaries) with two fake crumple_bench binaries.
+
+Each fake binary is a small script that writes Google Benchmark's JSON (a median aggregate per
+benchmark) to --benchmark_out, taking its round's value from a list it is given, and logs each
+call; the tests read ab.sh's table. Wrong code this catches: rounds not alternated A, B, A, B;
+the ratio taken of the medians instead of per round; the counter ignored; a filter that matched
+nothing, or a missing binary, accepted silently.
+"""
+import os
+import stat
+import subprocess
+import tempfile
+import textwrap
+import unittest
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+AB = ROOT / "scripts" / "ab.sh"
+
+FAKE = textwrap.dedent("""\
+    #!/usr/bin/python3
+    import json, sys
+    values, log, names = {values!r}, {log!r}, {names!r}
+    out = next(a.split("=", 1)[1] for a in sys.argv if a.startswith("--benchmark_out="))
+    with open(log, "a") as f:
+        f.write({side!r} + "\\n")
+    calls = open(log).read().split().count({side!r})
+    if not names:  # like crumple_bench when the filter matches nothing: an empty file, status 0
+        open(out, "w").close()
+        sys.exit(0)
+    v = values[calls - 1]
+    rows = [{{"name": n + "_median", "run_name": n, "run_type": "aggregate", "aggregate_name": "median",
+              "real_time": v, "time_unit": "ms", "us_per_event": v / 10}} for n in names]
+    json.dump({{"benchmarks": rows}}, open(out, "w"))
+""")
+
+
+class AbScript(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.log = os.path.join(self.dir.name, "calls.log")
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def fake(self, side, values, names=("BM_Events/fast/1/128",)):
+        path = os.path.join(self.dir.name, side)
+        Path(path).write_text(FAKE.format(values=list(values), log=self.log, names=list(names), side=side))
+        os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
+        return path
+
+    def run_ab(self, *args):
+        return subprocess.run(["bash", str(AB), *args], capture_output=True, text=True, timeout=60)
+
+    def row(self, stdout, name):
+        line = next(l for l in stdout.splitlines() if l.startswith(f"| {name} "))
+        return [c.strip() for c in line.strip("|").split("|")]
+
+    def test_medians_and_paired_ratio(self):
+        # Round ratios 0.5, 0.8, 0.9: their median 0.8 differs from the ratio of the medians (9/10).
+        a = self.fake("A", [10, 20, 5])
+        b = self.fake("B", [5, 16, 4.5])
+        r = self.run_ab(a, b, "BM_Events", "3", "2")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        cells = self.row(r.stdout, "BM_Events/fast/1/128")
+        self.assertEqual(cells[1:], ["10 20 5", "5 16 4.5", "10", "5", "0.800"])
+        self.assertEqual(Path(self.log).read_text().split(), ["A", "B", "A", "B", "A", "B"])
+
+    def test_counter_is_compared(self):
+        a = self.fake("A", [10, 20])
+        b = self.fake("B", [30, 20])
+        r = self.run_ab(a, b, "BM_Events", "2", "1", "us_per_event")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("us_per_event", r.stdout)
+        self.assertEqual(self.row(r.stdout, "BM_Events/fast/1/128")[1:], ["1 2", "3 2", "1.5", "2.5", "2.000"])
+
+    def test_unknown_counter_fails(self):
+        r = self.run_ab(self.fake("A", [1]), self.fake("B", [1]), "BM_Events", "1", "1", "no_such")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("no counter no_such", r.stderr)
+
+    def test_filter_matching_nothing_fails(self):
+        r = self.run_ab(self.fake("A", [1], names=()), self.fake("B", [1], names=()), "NOPE", "1", "1")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("matched no benchmark", r.stderr)
+
+    def test_bad_arguments_fail(self):
+        a = self.fake("A", [1])
+        for args in ([a], [a, os.path.join(self.dir.name, "missing"), "x"], [a, a, "x", "0"], [a, a, "x", "2", "y"]):
+            r = self.run_ab(*args)
+            self.assertEqual(r.returncode, 2, args)
+            self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
