@@ -407,15 +407,15 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord*
               budget = c.budget, unit = c.unit;
   const bool fracture = c.fracture, restoration = c.restoration;
   for (int e = begin; e < end; ++e) {
-    const EdgeRecord& E = edges[e];
-    const int a = E.a, b = E.b;
-    const int l = E.wl & ~(E.wl >> 31), r = E.wr & ~(E.wr >> 31);  // -1 -> 0, masked below
-    const bool two_wings = (E.wl >= 0) & (E.wr >= 0);
+    const EdgeRecord& edge = edges[e];
+    const int a = edge.a, b = edge.b;
+    const int l = edge.wl & ~(edge.wl >> 31), r = edge.wr & ~(edge.wr >> 31);  // -1 -> 0, masked below
+    const bool two_wings = (edge.wl >= 0) & (edge.wr >= 0);
     // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
     // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
     // every compressed edge broke at once).
     const float dx = (x[a] - x[b]) * unit, dy = (y[a] - y[b]) * unit, dz = (z[a] - z[b]) * unit;
-    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = E.l0 * unit;
+    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = edge.l0 * unit;
     const float comp = 1.0f - lt / rest;
     const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
     const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // l, r are 0 without wings
@@ -430,9 +430,9 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord*
     // Keyed by the logical id: the same stream whatever the slot order (layout.h).
     const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
     const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = fracture & (E.flags == (kAlive | kMesh | kBreakable)) & (E.l0 >= floor_length) & (lt < rest);
+    const bool can = fracture & (edge.flags == (kAlive | kMesh | kBreakable)) & (edge.l0 >= floor_length) & (lt < rest);
     const bool breaks = can & (Pstep > 0) & (u < Pstep);
-    const bool restores = restoration & (E.flags == kAlive) & (E.record >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
+    const bool restores = restoration & (edge.flags == kAlive) & (edge.record >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
     out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0
   }
 }
@@ -442,7 +442,7 @@ void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, i
   const Vertices& V = m.V;
   const Edges& E = m.E;
   auto run = [&](auto body) {
-    body(c, E.rows.data(), E.lid.data(), V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(),
+    body(c, E.slots.data(), E.lid.data(), V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(),
          out, begin, end);
   };
   if (c.step_exponent == 1.0f) run(adapt_body<true>);

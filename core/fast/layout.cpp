@@ -272,7 +272,7 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
   // itself, as the topology's convention says.
-  permute(par, s, E.rows, eorder, [&](EdgeRecord r) {
+  permute(par, s, E.slots, eorder, [&](EdgeRecord r) {
     if (r.flags & kAlive) r.a = vmap(r.a), r.b = vmap(r.b);
     else r.a = r.b = 0;
     r.wl = vmap(r.wl), r.wr = vmap(r.wr), r.tri0 = tmap(r.tri0), r.tri1 = tmap(r.tri1);

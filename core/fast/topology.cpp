@@ -38,7 +38,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
-  reserve_all(ne, E.rows, E.lid, E.phys);
+  reserve_all(ne, E.slots, E.lid, E.phys);
   reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
   records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
@@ -104,7 +104,7 @@ void Topology::fit() {
     }
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
-  if (const std::size_t n = E.lid.size(); n != E.rows.size()) grow(n, E.rows);
+  if (const std::size_t n = E.lid.size(); n != E.slots.size()) grow(n, E.slots);
   if (const std::size_t n = T.lid.size(); n != T.v0.size())
     grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
 }
@@ -275,10 +275,10 @@ int Topology::live_vertices() const {
   return V.size() - int(V.free_ids.size());
 }
 int Topology::live_mesh_edges() const {
-  return int(std::count_if(E.rows.begin(), E.rows.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == (kAlive | kMesh); }));
+  return int(std::count_if(E.slots.begin(), E.slots.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == (kAlive | kMesh); }));
 }
 int Topology::live_auxiliary() const {
-  return int(std::count_if(E.rows.begin(), E.rows.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == kAlive; }));
+  return int(std::count_if(E.slots.begin(), E.slots.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == kAlive; }));
 }
 int Topology::live_triangles() const { return T.size() - int(T.free_ids.size()); }
 
@@ -328,7 +328,7 @@ std::string Topology::check() const {
     return true;
   };
   if (!bijective(V.lid, V.phys) || V.lid.size() != V.m.size()) return fail("vertex logical ids are not a bijection");
-  if (!bijective(E.lid, E.phys) || E.lid.size() != E.rows.size()) return fail("edge logical ids are not a bijection");
+  if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return fail("edge logical ids are not a bijection");
   if (!bijective(T.lid, T.phys) || T.lid.size() != T.v0.size()) return fail("triangle logical ids are not a bijection");
   std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
   for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;

@@ -123,16 +123,18 @@ struct EdgeRecord {
   std::int32_t record = 0;          ///< index into Topology::records for auxiliary edges, else -1
   std::uint8_t flags = 0;           ///< kAlive | kMesh | kBreakable
 };
+// An event prefetches a record's first and last byte (event_prefetch.h): at most two lines.
+static_assert(sizeof(EdgeRecord) <= 64);
 
 struct Edges {
-  Array<EdgeRecord> rows;        ///< per slot (a new slot is all zero until init_edge)
+  Array<EdgeRecord> slots;       ///< the record of each slot (a new slot is all zero until init_edge)
   Array<std::int32_t> lid;       ///< logical id of each slot (keys the random stream [Eq 6])
   Array<std::int32_t> phys;      ///< slot of each logical id
   std::vector<int> free_ids;     ///< LIFO free list of logical ids
 
-  EdgeRecord& operator[](int e) { return rows[std::size_t(e)]; }
-  const EdgeRecord& operator[](int e) const { return rows[std::size_t(e)]; }
-  int size() const { return int(rows.size()); }
+  EdgeRecord& operator[](int e) { return slots[std::size_t(e)]; }
+  const EdgeRecord& operator[](int e) const { return slots[std::size_t(e)]; }
+  int size() const { return int(slots.size()); }
 };
 
 struct Triangles {

@@ -52,7 +52,7 @@ TEST(BytesMoved, FrozenStepIsItsFourPasses) {
 TEST(BytesMoved, EventsCountTheLinesOfTheirRows) {
   const LayoutSizes s = grid4();
   // 5 vertices of 19 + 4 x 2 lines (a list: its start's line and its block's), 5 edges of 4
-  // (record 2, lid, phys), 4 triangles of 10, a 128-byte split record: 197 lines.
+  // (record at most 2, lid, phys), 4 triangles of 10, a 128-byte split record: 197 lines.
   const double per_event = 64 * (5 * 27 + 5 * 4 + 4 * 10 + 2);
   EXPECT_EQ(pass_bytes("topology_apply", s, 1, 0), pass_bytes("adapt_test", s, 1, 0) + 2 * 33);
   EXPECT_EQ(pass_bytes("topology_apply", s, 1, 3) - pass_bytes("topology_apply", s, 1, 0), 3 * per_event);

@@ -20,7 +20,7 @@ AB = ROOT / "scripts" / "ab.sh"
 FAKE = textwrap.dedent("""\
     #!/usr/bin/python3
     import json, sys
-    values, log, names = {values!r}, {log!r}, {names!r}
+    values, log, names, mode = {values!r}, {log!r}, {names!r}, {mode!r}
     out = next(a.split("=", 1)[1] for a in sys.argv if a.startswith("--benchmark_out="))
     with open(log, "a") as f:
         f.write({side!r} + "\\n")
@@ -28,9 +28,19 @@ FAKE = textwrap.dedent("""\
     if not names:  # like crumple_bench when the filter matches nothing: an empty file, status 0
         open(out, "w").close()
         sys.exit(0)
+    if mode == "crash":
+        sys.exit(3)
+    if mode == "drop_first" and calls == 1:  # the first benchmark missing from the first run
+        names = names[1:]
     v = values[calls - 1]
-    rows = [{{"name": n + "_median", "run_name": n, "run_type": "aggregate", "aggregate_name": "median",
-              "real_time": v, "time_unit": "ms", "us_per_event": v / 10}} for n in names]
+    if mode == "error":  # SkipWithError: an iteration row with the error, no aggregate
+        rows = [{{"name": n, "run_name": n, "run_type": "iteration", "error_occurred": True,
+                  "error_message": "state mismatch", "real_time": 0.0}} for n in names]
+    elif mode == "single":  # one repetition: its iteration row, no aggregates
+        rows = [{{"name": n, "run_name": n, "run_type": "iteration", "real_time": v}} for n in names]
+    else:
+        rows = [{{"name": n + "_median", "run_name": n, "run_type": "aggregate", "aggregate_name": "median",
+                  "real_time": v, "time_unit": "ms", "us_per_event": v / 10}} for n in names]
     json.dump({{"benchmarks": rows}}, open(out, "w"))
 """)
 
@@ -43,9 +53,10 @@ class AbScript(unittest.TestCase):
     def tearDown(self):
         self.dir.cleanup()
 
-    def fake(self, side, values, names=("BM_Events/fast/1/128",)):
+    def fake(self, side, values, names=("BM_Events/fast/1/128",), mode="median"):
         path = os.path.join(self.dir.name, side)
-        Path(path).write_text(FAKE.format(values=list(values), log=self.log, names=list(names), side=side))
+        Path(path).write_text(FAKE.format(values=list(values), log=self.log, names=list(names), side=side,
+                                          mode=mode))
         os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
         return path
 
@@ -64,7 +75,33 @@ class AbScript(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         cells = self.row(r.stdout, "BM_Events/fast/1/128")
         self.assertEqual(cells[1:], ["10 20 5", "5 16 4.5", "10", "5", "0.800"])
-        self.assertEqual(Path(self.log).read_text().split(), ["A", "B", "A", "B", "A", "B"])
+        # Alternated, and neither side always first: A B, B A, A B.
+        self.assertEqual(Path(self.log).read_text().split(), ["A", "B", "B", "A", "A", "B"])
+
+    def test_rounds_pair_by_round(self):
+        # A misses the benchmark in round 1: round 2's runs pair, not A's round 2 with B's round 1.
+        a = self.fake("A", [10, 20, 40], names=("BM_X", "BM_Y"), mode="drop_first")
+        b = self.fake("B", [30, 10, 10], names=("BM_X", "BM_Y"))
+        r = self.run_ab(a, b, "BM", "3", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        # BM_X pairs rounds 2 and 3 only: A 20, 40 against B 10, 10.
+        self.assertEqual(self.row(r.stdout, "BM_X")[1:], ["20 40", "10 10", "30", "10", "0.375"])
+
+    def test_one_repetition_uses_its_run(self):
+        r = self.run_ab(self.fake("A", [4, 8], mode="single"), self.fake("B", [2, 8], mode="single"), "BM", "2", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(self.row(r.stdout, "BM_Events/fast/1/128")[1:], ["4 8", "2 8", "6", "5", "0.750"])
+
+    def test_a_benchmark_that_did_not_run_fails(self):
+        r = self.run_ab(self.fake("A", [1]), self.fake("B", [1], mode="error"), "BM", "1", "1")
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("did not run on B in round 1: state mismatch", r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
+
+    def test_a_failing_binary_fails(self):
+        r = self.run_ab(self.fake("A", [1], mode="crash"), self.fake("B", [1]), "BM", "1", "1")
+        self.assertEqual(r.returncode, 1)
+        self.assertIn("failed in round 1", r.stderr)
 
     def test_counter_is_compared(self):
         a = self.fake("A", [10, 20])
