@@ -10,7 +10,7 @@ namespace {
 // Element sizes of the layout (topology.h). The asserts make a layout change fail here, where
 // the formulas below must then be revisited, rather than silently miscount.
 constexpr double kF = 4, kI = 4, kU8 = 1, kU16 = 2;  // float, int32 id, flag byte, list count
-constexpr double kF4 = 16, kOut = 32;                // Float4 (g, area, rows), EdgeOut record
+constexpr double kF4 = 16, kOut = 32;                // Float4 (vertex rows, g, area), EdgeOut record
 constexpr double kEdge = 36;                         // EdgeRecord: the edge's topology and l0
 static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut && sizeof(fast::EdgeRecord) == kEdge);
 constexpr double kLine = 64;
@@ -20,53 +20,49 @@ double list_row(double room) { return kI + kI * room; }
 double list_lines(double room) { return 1 + std::ceil(kI * room / kLine); }
 
 // triangle_areas: per triangle slot its corners v0..v2 and alive in, its area vector out; the
-// corners' positions x, y, z once per vertex.
-// vertex_normals: per vertex its triangle row and count, the normal n out; each area once.
+// corners' position rows once per vertex.
+// vertex_normals: per vertex its triangle row and count, the normal row out; each area once.
 double normals(const LayoutSizes& s) {
-  const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * 3 * kF;
-  const double sums = s.vertices * (list_row(s.room_t) + kU16 + 3 * kF) + s.triangles * kF4;
+  const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * kF4;
+  const double sums = s.vertices * (list_row(s.room_t) + kU16 + kF4) + s.triangles * kF4;
   return areas + sums;
 }
 
-// pack_rows: per vertex x, v, m, n in and the rows xm, vm, nr out. Then per edge slot its
-// record in (a, b, wl, wr, l0, flags read; the record is read whole) and the 32-byte EdgeOut out;
-// per vertex (endpoints and wings, each once) its three rows.
-double edge_forces(const LayoutSizes& s) {
-  const double pack = s.vertices * (10 * kF + 3 * kF4);
-  return pack + s.edges * (kEdge + kOut) + s.vertices * 3 * kF4;
-}
+// Per edge slot its record in (a, b, wl, wr, l0, flags read; the record is read whole) and the
+// 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its three rows.
+double edge_forces(const LayoutSizes& s) { return s.edges * (kEdge + kOut) + s.vertices * 3 * kF4; }
 
-// Per vertex its spring, neighbour and wing rows and both counts, its velocity row and n in, f,
-// ksum and g out; every EdgeOut record once, every neighbour's velocity row once (the vertex's
-// own among them).
+// Per vertex its spring, neighbour and wing rows and both counts, its velocity and normal rows
+// in, f, ksum and g out; every EdgeOut record once, every neighbour's velocity row once (the
+// vertex's own among them).
 double gather(const LayoutSizes& s) {
   const double lists = list_row(s.room_e) + kI * s.room_e + list_row(s.room_t) + 2 * kU16;
-  const double per_vertex = lists + kF4 + 3 * kF + 4 * kF + kF4;
+  const double per_vertex = lists + kF4 + kF4 + 4 * kF + kF4;
   return s.vertices * per_vertex + s.edges * kOut;
 }
 
-// Per sweep and vertex: its neighbour row and count, m, ksum, v, f in, each neighbour's guess g
-// once (the vertex's own g among them), g_next out. Then momentum_drift with the total mass
-// (m, g, v, f in) and advance (m, g, x, v in; x, v out).
+// Per sweep and vertex: its neighbour row and count, ksum, f and its velocity row in, each
+// neighbour's guess g once (the vertex's own g among them), g_next out. Then momentum_drift with
+// the total mass (velocity row, g, f in) and advance (position row and g in; both rows out).
 double integrate(const LayoutSizes& s, int sweeps) {
-  const double sweep = s.vertices * (list_row(s.room_e) + kU16 + 2 * kF + 6 * kF + kF4 + kF4);
-  const double drift = s.vertices * (kF + kF4 + 6 * kF);
-  const double advance = s.vertices * (kF + kF4 + 6 * kF + 6 * kF);
+  const double sweep = s.vertices * (list_row(s.room_e) + kU16 + kF + kF4 + 3 * kF + kF4 + kF4);
+  const double drift = s.vertices * (kF4 + kF4 + 3 * kF);
+  const double advance = s.vertices * (kF4 + kF4 + 2 * kF4);
   return sweeps * sweep + drift + advance;
 }
 
 // The normals on the new positions, then per edge slot its record and lid in and one decision
-// byte out; per vertex x and n once.
+// byte out; per vertex its position and normal rows once.
 double adapt_test(const LayoutSizes& s) {
-  return normals(s) + s.edges * (kEdge + kI + kU8) + s.vertices * 6 * kF;
+  return normals(s) + s.edges * (kEdge + kI + kU8) + s.vertices * 2 * kF4;
 }
 
 // Lines of one element's row, each array's entry on its own line (random access in SoA): a
-// vertex's 13 floats x, v, m, n, rest position, its counts (2), rooms (2), lid, phys, and its
-// four adjacency lists (each: block start and block); an edge's record (at most two lines: 36
+// vertex's three rows (position, velocity, normal), rest position (3 floats), its counts (2),
+// rooms (2), lid, phys, and its four adjacency lists (each: block start and block); an edge's record (at most two lines: 36
 // bytes straddle a line boundary for half the slots), lid and phys; a triangle's 10 arrays. The
 // step's scratch (step_scratch.h) is no part of a row: no event reads or writes it.
-double vertex_lines(const LayoutSizes& s) { return 19 + 2 * list_lines(s.room_e) + 2 * list_lines(s.room_t); }
+double vertex_lines(const LayoutSizes& s) { return 12 + 2 * list_lines(s.room_e) + 2 * list_lines(s.room_t); }
 constexpr double kEdgeLines = 2 + 2, kTriangleLines = 10;
 constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
 
@@ -86,7 +82,7 @@ double topology_apply(const LayoutSizes& s, double events) {
 // relayout reads every array of every element and writes it permuted: twice the whole state
 // (not the step's scratch, which the next step rewrites: no EdgeOut).
 double layout(const LayoutSizes& s) {
-  const double vertex = 14 * kF + 2 * kF4 + 3 * kF + 4 * kU16 + 2 * kI + 2 * list_row(s.room_e) + 2 * list_row(s.room_t);
+  const double vertex = 3 * kF4 + 3 * kF + 4 * kU16 + 2 * kI + 2 * list_row(s.room_e) + 2 * list_row(s.room_t);
   const double edge = kEdge + 2 * kI;
   const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);

@@ -28,8 +28,8 @@ inline void prefetch_edge(const Topology& m, int e) {
 inline void prefetch_vertex(const Topology& m, int v) {
   if (v < 0) return;
   const Vertices& V = m.V;
-  for (const Array<float>* a : {&V.x, &V.y, &V.z, &V.vx, &V.vy, &V.vz, &V.m, &V.nx, &V.ny, &V.nz, &V.rx, &V.ry, &V.rz})
-    prefetch(&(*a)[v]);
+  prefetch(&V.xm[v]), prefetch(&V.vm[v]), prefetch(&V.nr[v]);
+  for (const Array<float>* a : {&V.rx, &V.ry, &V.rz}) prefetch(&(*a)[v]);
   prefetch(&V.n_springs[v]), prefetch(&V.n_tris[v]);
   prefetch(m.springs_of(v)), prefetch(m.nbrs_of(v)), prefetch(m.tris_of(v)), prefetch(m.wings_of(v));
 }

@@ -128,12 +128,12 @@ void FastSimulator::renew_normals() {
   const Vertices& V = topo_.V;
   const Triangles& T = topo_.T;
   Float4* area = topo_.T.area.data();
-  const NormalsOut normals{topo_.V.nx.data(), topo_.V.ny.data(), topo_.V.nz.data()};
+  Float4* normals = topo_.V.nr.data();
   par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
       if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.x[v]), prefetch_read(&V.y[v]), prefetch_read(&V.z[v]);
+        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.xm[v]);
       triangle_areas(topo_, unit, area, changed[k], changed[k] + 1);
     }
   });
@@ -189,14 +189,18 @@ double FastSimulator::margin(int e, double budget) const {
   const Vertices& V = topo_.V;
   const Edges& E = topo_.E;
   const std::uint8_t f = E[e].flags;
-  auto dot_n = [&](int a, int b) { return double(V.nx[a]) * V.nx[b] + double(V.ny[a]) * V.ny[b] + double(V.nz[a]) * V.nz[b]; };
+  auto dot_n = [&](int a, int b) {
+    const Float4 na = V.nr[a], nb = V.nr[b];
+    return double(na.x) * nb.x + double(na.y) * nb.y + double(na.z) * nb.z;
+  };
   if (!(f & kAlive)) return 0;  // a dead slot's indices may be stale
   const int a = E[e].a, b = E[e].b, l = E[e].wl, r = E[e].wr;
   const double n_rl = (l >= 0 && r >= 0) ? dot_n(r, l) : 1.0;
   if (!(f & kMesh)) return (params_.restoration && E[e].record >= 0) ? (1.0 - n_rl) / 2.0 - budget * params_.epsilon : 0;
   if (!params_.fracture) return 0;
   const double u = uniform(params_.seed, steps_, std::uint32_t(E.lid[e]), Draw::Fracture);
-  const double dx = double(V.x[a]) - V.x[b], dy = double(V.y[a]) - V.y[b], dz = double(V.z[a]) - V.z[b];
+  const Float4 pa = V.xm[a], pb = V.xm[b];
+  const double dx = double(pa.x) - pb.x, dy = double(pa.y) - pb.y, dz = double(pa.z) - pb.z;
   const double lt = std::sqrt(dx * dx + dy * dy + dz * dz);
   if (!(f & kBreakable) || E[e].l0 < scene_.floor_length || !(lt < E[e].l0)) return -u;
   const double c = 1.0 - lt / E[e].l0;

@@ -125,7 +125,8 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   const float flat_draw = plan.flat_draw;
   const int i = m.E[e].a, j = m.E[e].b, tL = m.E[e].tri0, tR = m.E[e].tri1;
   const int l = m.E[e].wl, r = m.E[e].wr;
-  const D3 xi{V.x[i], V.y[i], V.z[i]}, xj{V.x[j], V.y[j], V.z[j]};
+  const Float4 pi = V.xm[i], pj = V.xm[j];
+  const D3 xi{pi.x, pi.y, pi.z}, xj{pj.x, pj.y, pj.z};
   const D3 d{xj.x - xi.x, xj.y - xi.y, xj.z - xi.z};
   const double lt = norm(d), l0 = m.E[e].l0;
 
@@ -137,11 +138,12 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
     const double len = norm(w);
     if (len > 0) nu = {nu.x + w.x / len, nu.y + w.y / len, nu.z + w.z / len};
   }
-  if (!(norm(nu) > 1e-12)) nu = {double(V.nx[i]) + V.nx[j], double(V.ny[i]) + V.ny[j], double(V.nz[i]) + V.nz[j]};
+  const Float4 ni = V.nr[i], nj = V.nr[j];
+  if (!(norm(nu) > 1e-12)) nu = {double(ni.x) + nj.x, double(ni.y) + nj.y, double(ni.z) + nj.z};
   const double nlen = norm(nu);
   nu = nlen > 1e-12 ? D3{nu.x / nlen, nu.y / nlen, nu.z / nlen} : D3{};
   const double theta = 0.5 * params_.psi * std::sqrt(std::max(0.0, l0 * l0 - lt * lt));
-  const double curl = (double(V.nx[j]) - V.nx[i]) * d.x + (double(V.ny[j]) - V.ny[i]) * d.y + (double(V.nz[j]) - V.nz[i]) * d.z;
+  const double curl = (double(nj.x) - ni.x) * d.x + (double(nj.y) - ni.y) * d.y + (double(nj.z) - ni.z) * d.z;
   const double s = std::abs(curl) <= 1e-6 * lt ? (flat_draw < 0.5f ? -1.0 : 1.0) : (curl > 0 ? 1.0 : -1.0);
 
   // [Eq 3] masses of N = {i, j, l, r}; [Eq 4] the new vertex's momentum.
@@ -159,22 +161,21 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
     const int k = rec.k[q];
     if (k < 0) continue;
     rec.delta[q] = rest_dist(k) / dsum;
-    const float m_new = float(0.5 * (std::pow(rec.delta[q], 1.0 / params_.varphi) + 1.0) * V.m[k]);
-    rec.dm[q] = double(V.m[k] - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
-    V.m[k] = m_new;
+    const float m_new = float(0.5 * (std::pow(rec.delta[q], 1.0 / params_.varphi) + 1.0) * V.mass(k));
+    rec.dm[q] = double(V.mass(k) - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
+    V.set_mass(k, m_new);
     mn += rec.dm[q];
-    pn = {pn.x + rec.dm[q] * V.vx[k], pn.y + rec.dm[q] * V.vy[k], pn.z + rec.dm[q] * V.vz[k]};
+    const Float4 vk = V.vm[k];
+    pn = {pn.x + rec.dm[q] * vk.x, pn.y + rec.dm[q] * vk.y, pn.z + rec.dm[q] * vk.z};
   }
 
   const int n = plan.n;
   m.init_vertex(n);
   V.rx[n] = float(Xn.x), V.ry[n] = float(Xn.y), V.rz[n] = float(Xn.z);
-  V.x[n] = float(0.5 * (xi.x + xj.x) + s * theta * nu.x);
-  V.y[n] = float(0.5 * (xi.y + xj.y) + s * theta * nu.y);
-  V.z[n] = float(0.5 * (xi.z + xj.z) + s * theta * nu.z);
-  V.m[n] = float(mn);
-  V.vx[n] = float(pn.x / mn), V.vy[n] = float(pn.y / mn), V.vz[n] = float(pn.z / mn);
-  V.nx[n] = float(nu.x), V.ny[n] = float(nu.y), V.nz[n] = float(nu.z);
+  V.xm[n] = Float4{float(0.5 * (xi.x + xj.x) + s * theta * nu.x), float(0.5 * (xi.y + xj.y) + s * theta * nu.y),
+                   float(0.5 * (xi.z + xj.z) + s * theta * nu.z), float(mn)};
+  V.vm[n] = Float4{float(pn.x / mn), float(pn.y / mn), float(pn.z / mn), float(mn)};
+  V.nr[n] = Float4{float(nu.x), float(nu.y), float(nu.z), 0.0f};
   rec.n = n;
   rec.e = plan.edges;
   const float lt_f = float(lt);
@@ -188,7 +189,7 @@ bool FastSimulator::can_restore(int e) const {
   if (e < 0 || e >= m.E.size() || m.E[e].flags != kAlive || m.E[e].record < 0) return false;
   const SplitRecord& s = m.records[m.E[e].record];
   const int i = s.k[0], j = s.k[1], l = s.k[2], r = s.k[3], n = s.n;
-  if (!(m.V.m[n] > 0)) return false;
+  if (!(m.V.mass(n) > 0)) return false;
   const int ends[4][2] = {{i, n}, {n, j}, {l, n}, {n, r}};
   int expected = 0;
   for (int q = 0; q < 4; ++q) {
@@ -213,8 +214,9 @@ Freed FastSimulator::restore_edge_local(int e) {
   const int rid = m.E[e].record;
   const SplitRecord s = m.records[rid];
   const int i = s.k[0], j = s.k[1], n = s.n;
-  const double mn = V.m[n];
-  const D3 vn{V.vx[n], V.vy[n], V.vz[n]};
+  const Float4 row_n = V.vm[n];
+  const double mn = row_n.w;
+  const D3 vn{row_n.x, row_n.y, row_n.z};
   if (params_.restore == RestoreForm::Exact) {
     double dsum = 0;
     for (int q = 0; q < 4; ++q)
@@ -222,26 +224,27 @@ Freed FastSimulator::restore_edge_local(int e) {
     for (int q = 0; q < 4; ++q) {
       const int k = s.k[q];
       if (k < 0) continue;
-      const double mk = V.m[k], m_new = mk + mn * s.dm[q] / dsum;
-      V.vx[k] = float((mk * V.vx[k] + (m_new - mk) * vn.x) / m_new);
-      V.vy[k] = float((mk * V.vy[k] + (m_new - mk) * vn.y) / m_new);
-      V.vz[k] = float((mk * V.vz[k] + (m_new - mk) * vn.z) / m_new);
-      V.m[k] = float(m_new);
+      const Float4 vk = V.vm[k];
+      const double mk = vk.w, m_new = mk + mn * s.dm[q] / dsum;
+      V.vm[k] = Float4{float((mk * vk.x + (m_new - mk) * vn.x) / m_new), float((mk * vk.y + (m_new - mk) * vn.y) / m_new),
+                       float((mk * vk.z + (m_new - mk) * vn.z) / m_new), float(m_new)};
+      V.xm[k].w = float(m_new);
     }
   } else {
     double msum = 0;
     for (int q = 0; q < 4; ++q) {
       const int k = s.k[q];
       if (k < 0) continue;
-      V.m[k] = float(2.0 * V.m[k] / (std::pow(s.delta[q], 1.0 / params_.varphi) + 1.0));  // [Eq 11]
-      msum += V.m[k];
+      V.set_mass(k, float(2.0 * V.mass(k) / (std::pow(s.delta[q], 1.0 / params_.varphi) + 1.0)));  // [Eq 11]
+      msum += V.mass(k);
     }
     for (int q = 0; q < 4; ++q) {
       const int k = s.k[q];
       if (k < 0) continue;
-      V.vx[k] = float(V.vx[k] + mn * vn.x / msum);  // [Eq 12]
-      V.vy[k] = float(V.vy[k] + mn * vn.y / msum);
-      V.vz[k] = float(V.vz[k] + mn * vn.z / msum);
+      Float4& vk = V.vm[k];
+      vk.x = float(vk.x + mn * vn.x / msum);  // [Eq 12]
+      vk.y = float(vk.y + mn * vn.y / msum);
+      vk.z = float(vk.z + mn * vn.z / msum);
     }
   }
   // (i,n,l) -> (i,j,l) and (j,n,r) -> (j,i,r), their sides read before detach clears them.

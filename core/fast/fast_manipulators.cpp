@@ -17,14 +17,15 @@ void constrain_range(Vertices& V, const Manipulators& m, int begin, int end) {
   for (const KinematicSphere& s : m.spheres) {
     const float cx = float(s.center[0]), cy = float(s.center[1]), cz = float(s.center[2]), R = float(s.radius);
     for (int v = begin; v < end; ++v) {
-      if (!(V.m[v] > 0)) continue;
-      const float dx = V.x[v] - cx, dy = V.y[v] - cy, dz = V.z[v] - cz;
+      if (!(V.mass(v) > 0)) continue;
+      Float4 &p = V.xm[v], &u = V.vm[v];
+      const float dx = p.x - cx, dy = p.y - cy, dz = p.z - cz;
       const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
       if (!(r < R) || r == 0) continue;  // a vertex at the very centre has no outward ray
       const float ux = dx / r, uy = dy / r, uz = dz / r;
-      V.x[v] = cx + R * ux, V.y[v] = cy + R * uy, V.z[v] = cz + R * uz;
-      const float in = V.vx[v] * ux + V.vy[v] * uy + V.vz[v] * uz;
-      if (in < 0) V.vx[v] -= in * ux, V.vy[v] -= in * uy, V.vz[v] -= in * uz;
+      p.x = cx + R * ux, p.y = cy + R * uy, p.z = cz + R * uz;
+      const float in = u.x * ux + u.y * uy + u.z * uz;
+      if (in < 0) u.x -= in * ux, u.y -= in * uy, u.z -= in * uz;
     }
   }
   for (const KinematicPlane& p : m.planes) {
@@ -32,12 +33,13 @@ void constrain_range(Vertices& V, const Manipulators& m, int begin, int end) {
     const float nx = float(p.normal[0] / len), ny = float(p.normal[1] / len), nz = float(p.normal[2] / len);
     const float ox = float(p.point[0]), oy = float(p.point[1]), oz = float(p.point[2]);
     for (int v = begin; v < end; ++v) {
-      if (!(V.m[v] > 0)) continue;
-      const float d = (V.x[v] - ox) * nx + (V.y[v] - oy) * ny + (V.z[v] - oz) * nz;
+      if (!(V.mass(v) > 0)) continue;
+      Float4 &p = V.xm[v], &u = V.vm[v];
+      const float d = (p.x - ox) * nx + (p.y - oy) * ny + (p.z - oz) * nz;
       if (!(d < 0)) continue;
-      V.x[v] -= d * nx, V.y[v] -= d * ny, V.z[v] -= d * nz;
-      const float in = V.vx[v] * nx + V.vy[v] * ny + V.vz[v] * nz;
-      if (in < 0) V.vx[v] -= in * nx, V.vy[v] -= in * ny, V.vz[v] -= in * nz;
+      p.x -= d * nx, p.y -= d * ny, p.z -= d * nz;
+      const float in = u.x * nx + u.y * ny + u.z * nz;
+      if (in < 0) u.x -= in * nx, u.y -= in * ny, u.z -= in * nz;
     }
   }
 }
@@ -48,7 +50,7 @@ void FastSimulator::set_manipulators(const Manipulators& m) { manip_ = m; }
 int FastSimulator::live_slot(int id) const {
   if (id < 0 || id >= topo_.V.size()) return -1;
   const int v = topo_.V.phys[id];
-  return topo_.V.m[v] > 0 ? v : -1;
+  return topo_.V.mass(v) > 0 ? v : -1;
 }
 
 // The force joins f (what explicit_velocity and the sweeps read) and the first guess g, which
@@ -61,8 +63,9 @@ void FastSimulator::add_grab_forces() {
   for (const Grab& g : manip_.grabs) {
     const int v = live_slot(g.vertex);
     if (v < 0) continue;
-    const double m = V.m[v], row = m + double(f.ksum[v]);  // ksum: sum of W_e, from gather_forces
-    const std::array<double, 3> F = grab_force(g, {V.x[v], V.y[v], V.z[v]}, {V.vx[v], V.vy[v], V.vz[v]}, row, h);
+    const double m = V.mass(v), row = m + double(f.ksum[v]);  // ksum: sum of W_e, from gather_forces
+    const Float4 p = V.xm[v], u = V.vm[v];
+    const std::array<double, 3> F = grab_force(g, {p.x, p.y, p.z}, {u.x, u.y, u.z}, row, h);
     f.fx[v] += float(F[0]), f.fy[v] += float(F[1]), f.fz[v] += float(F[2]);
     const double gain = params_.predictor == Predictor::Bounded ? h / (m + 2 * double(f.ksum[v])) : h / m;
     step_.g[v].x += float(gain * F[0]), step_.g[v].y += float(gain * F[1]), step_.g[v].z += float(gain * F[2]);
@@ -76,8 +79,8 @@ void FastSimulator::apply_manipulators() {
   for (const Pin& p : manip_.pins) {
     const int v = live_slot(p.vertex);
     if (v < 0) continue;
-    V.x[v] = float(p.target[0]), V.y[v] = float(p.target[1]), V.z[v] = float(p.target[2]);
-    V.vx[v] = V.vy[v] = V.vz[v] = 0;
+    V.xm[v] = Float4{float(p.target[0]), float(p.target[1]), float(p.target[2]), V.mass(v)};
+    V.vm[v] = Float4{0, 0, 0, V.mass(v)};
   }
 }
 
@@ -92,11 +95,12 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
   par_.run(V.size(), kPassGrain, [&](int b, int e) {
     for (int id = b; id < e; ++id) {
       const int v = V.phys[id];
-      if (!(V.m[v] > 0)) continue;
+      if (!(V.mass(v) > 0)) continue;
       float* x = &out.positions[3 * std::size_t(id)];
       float* n = &out.normals[3 * std::size_t(id)];
-      x[0] = V.x[v], x[1] = V.y[v], x[2] = V.z[v];
-      n[0] = V.nx[v], n[1] = V.ny[v], n[2] = V.nz[v];
+      const Float4 p = V.xm[v], nv = V.nr[v];
+      x[0] = p.x, x[1] = p.y, x[2] = p.z;
+      n[0] = nv.x, n[1] = nv.y, n[2] = nv.z;
     }
   });
   if (!triangles) return;

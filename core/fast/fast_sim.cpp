@@ -35,10 +35,8 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
     topo_.V.rx[v] = float(scene_.rest[k][0]);
     topo_.V.ry[v] = float(scene_.rest[k][1]);
     topo_.V.rz[v] = float(scene_.rest[k][2]);
-    topo_.V.x[v] = float(scene_.position[k][0]);
-    topo_.V.y[v] = float(scene_.position[k][1]);
-    topo_.V.z[v] = float(scene_.position[k][2]);
-    topo_.V.m[v] = float(scene_.mass[k]);
+    topo_.V.xm[v] = Float4{float(scene_.position[k][0]), float(scene_.position[k][1]), float(scene_.position[k][2]), 0.0f};
+    topo_.V.set_mass(v, float(scene_.mass[k]));
   }
   // Edges in order of first appearance over triangles and their sides (sim/simulator.h).
   std::map<std::pair<int, int>, int> seen;
@@ -91,15 +89,14 @@ void FastSimulator::compute_normals() {
   const float unit = length_unit();
   Float4* area = topo_.T.area.data();
   par_.run(topo_.T.size(), kPassGrain, [&](int b, int e) { triangle_areas(topo_, unit, area, b, e); });
-  const NormalsOut n{topo_.V.nx.data(), topo_.V.ny.data(), topo_.V.nz.data()};
-  par_.run(topo_.V.size(), kPassGrain, [&](int b, int e) { vertex_normals(topo_, n, b, e); });
+  Float4* normals = topo_.V.nr.data();
+  par_.run(topo_.V.size(), kPassGrain, [&](int b, int e) { vertex_normals(topo_, normals, b, e); });
 }
 
 void FastSimulator::edge_pass(const StepConstants& c) {
   step_.fit(topo_);
-  par_.run_lanes(topo_.V.size(), kPassGrain, [&](int b, int e) { pack_rows(topo_.V, step_.rows, b, e); });
   EdgeOut* out = step_.edge_out.data();
-  par_.run(topo_.E.size(), kPassGrain, [&](int b, int e) { edge_forces(topo_.E, step_.rows, c, out, b, e); });
+  par_.run(topo_.E.size(), kPassGrain, [&](int b, int e) { edge_forces(topo_.E, topo_.V, c, out, b, e); });
 }
 
 void FastSimulator::gather_pass(const StepConstants& c) {
@@ -107,7 +104,7 @@ void FastSimulator::gather_pass(const StepConstants& c) {
   const EdgeOut* records = step_.edge_out.data();
   Float4* g = step_.g.data();
   par_.run(topo_.V.size(), kPassGrain,
-           [&](int b, int e) { gather_forces(topo_, step_.rows, records, c, step_.forces, g, b, e); });
+           [&](int b, int e) { gather_forces(topo_, records, c, step_.forces, g, b, e); });
 }
 
 void FastSimulator::compute_forces() {
@@ -121,7 +118,7 @@ void FastSimulator::compute_forces() {
 }
 
 void FastSimulator::pin_guesses() {
-  for (int k : scene_.pinned) step_.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.m[topo_.V.phys[k]]};
+  for (int k : scene_.pinned) step_.g[topo_.V.phys[k]] = Float4{0, 0, 0, topo_.V.mass(topo_.V.phys[k])};
 }
 
 void FastSimulator::integrate() {
@@ -139,7 +136,7 @@ void FastSimulator::integrate() {
     if (axial()) {  // the 3 x 3 rows, and the first guess from them
       step_.fit_blocks(topo_);
       par_.run(n, kPassGrain, [&](int b, int e) {
-        axial_blocks(topo_, step_.rows, step_.forces, c, step_.wsum.data(), step_.g.data(), b, e);
+        axial_blocks(topo_, step_.forces, c, step_.wsum.data(), step_.g.data(), b, e);
       });
     }
     sweep_rows(c, corr);
@@ -155,7 +152,7 @@ void FastSimulator::sweep_rows(const StepConstants& c, float corr[3]) {
     Float4* g_next = step_.g_next.data();
     if (axial())
       par_.run(n, kPassGrain, [&](int b, int e) {
-        axial_sweep(topo_, step_.rows, step_.forces, step_.wsum.data(), c, g, g_next, b, e);
+        axial_sweep(topo_, step_.forces, step_.wsum.data(), c, g, g_next, b, e);
       });
     else
       par_.run(n, kPassGrain, [&](int b, int e) { jacobi_sweep(topo_, step_.forces, c, g, g_next, b, e); });
@@ -179,9 +176,9 @@ void FastSimulator::advance_state(const StepConstants& c, const float corr[3]) {
   par_.run_lanes(n, kPassGrain, [&](int b, int e) { advance(g, c, corr, center, radius, topo_.V, b, e); });
   for (int k : scene_.pinned) {  // input vertex k has logical id k
     const int v = topo_.V.phys[k];
-    topo_.V.x[v] = float(scene_.position[k][0]), topo_.V.y[v] = float(scene_.position[k][1]);
-    topo_.V.z[v] = float(scene_.position[k][2]);
-    topo_.V.vx[v] = topo_.V.vy[v] = topo_.V.vz[v] = 0;
+    const float m = topo_.V.mass(v);
+    topo_.V.xm[v] = Float4{float(scene_.position[k][0]), float(scene_.position[k][1]), float(scene_.position[k][2]), m};
+    topo_.V.vm[v] = Float4{0, 0, 0, m};
   }
 }
 

@@ -2,11 +2,12 @@
 // range kernel (kernels.h) run on the backend's TBB arena.
 //
 // Design note (the whole pipeline of one step; cf. Box2D's solver.h):
-//   forces     triangle_areas -> vertex_normals -> pack_rows + edge_forces -> gather_forces
+//   forces     triangle_areas -> vertex_normals -> edge_forces -> gather_forces
 //              Springs, bending and predictor are computed per element and gathered per
 //              vertex over its adjacency lists: no scatter, no atomics, one summation order.
-//              pack_rows copies position, velocity, mass and normal into 16-byte rows, and the
-//              edge pass reads each of an edge's four vertices as rows, eight edges in AVX lanes
+//              The vertex state lives in 16-byte rows (position with mass, velocity with mass,
+//              normal: topology.h), and the edge pass reads each of an edge's four vertices as
+//              rows, eight edges in AVX lanes
 //              (lanes8.h). It stores per edge only what the gather cannot compute from the
 //              endpoints' rows (force and bending, 32 bytes); the gather sums those records as
 //              wide rows (wide.h), the first 8 entries of a list in a loop of fixed length (no
@@ -117,7 +118,7 @@ class FastSimulator final : public Simulator {
   bool axial() const { return params_.integrator == Integrator::Approx && params_.jacobian == Jacobian::Axial; }
   void compute_normals();
   void compute_forces();
-  void edge_pass(const StepConstants& c);  ///< pack_rows, then edge_forces (both one pass's time)
+  void edge_pass(const StepConstants& c);  ///< edge_forces over every edge slot
   void gather_pass(const StepConstants& c);
   void integrate();
   void pin_guesses();  ///< pinned vertices (hang scene) are fixed neighbours: guess 0

@@ -32,8 +32,8 @@ Totals FastSimulator::totals() const {
       TotalsPart& t = parts[b];
       for (int id = b * kTotalsBlock, last = std::min(nv, id + kTotalsBlock); id < last; ++id) {
         const int v = V.phys[id];
-        if (!(V.m[v] > 0)) continue;
-        const double m = V.m[v], vx = V.vx[v], vy = V.vy[v], vz = V.vz[v];
+        if (!(V.mass(v) > 0)) continue;
+        const double m = V.mass(v), vx = V.vm[v].x, vy = V.vm[v].y, vz = V.vm[v].z;
         t.mass += m;
         t.momentum[0] += m * vx;
         t.momentum[1] += m * vy;
@@ -41,9 +41,9 @@ Totals FastSimulator::totals() const {
         const double v2 = vx * vx + vy * vy + vz * vz;
         t.kinetic += 0.5 * m * v2;
         t.max_speed = std::max(t.max_speed, std::sqrt(v2));
-        const double dx = V.x[v] - c[0], dy = V.y[v] - c[1], dz = V.z[v] - c[2];
+        const double dx = V.xm[v].x - c[0], dy = V.xm[v].y - c[1], dz = V.xm[v].z - c[2];
         t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
-        t.finite &= bool(std::isfinite(V.x[v] + V.y[v] + V.z[v] + v2));
+        t.finite &= bool(std::isfinite(V.xm[v].x + V.xm[v].y + V.xm[v].z + v2));
       }
     }
   });
@@ -54,7 +54,7 @@ Totals FastSimulator::totals() const {
         const int e = E.phys[id];
         if ((E[e].flags & (kAlive | kMesh)) != (kAlive | kMesh)) continue;
         const int a = E[e].a, bb = E[e].b;
-        const double dx = double(V.x[a]) - V.x[bb], dy = double(V.y[a]) - V.y[bb], dz = double(V.z[a]) - V.z[bb];
+        const double dx = double(V.xm[a].x) - V.xm[bb].x, dy = double(V.xm[a].y) - V.xm[bb].y, dz = double(V.xm[a].z) - V.xm[bb].z;
         const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E[e].l0 - 1.0;
         t.max_strain = std::max(t.max_strain, std::abs(strain));
         t.strain2 += strain * strain;
@@ -87,10 +87,10 @@ double FastSimulator::stiffness_bound() const {
   const Vertices& V = topo_.V;
   double mu = 0;
   for (int v = 0; v < V.size(); ++v) {
-    if (!(V.m[v] > 0)) continue;
+    if (!(V.mass(v) > 0)) continue;
     double row = 0;
     for (int k = 0; k < V.n_springs[v]; ++k) {
-      const double mi = V.m[v], mj = V.m[topo_.nbrs_of(v)[k]];
+      const double mi = V.mass(v), mj = V.mass(topo_.nbrs_of(v)[k]);
       row += (mi + mj) * (1 / mi + 1 / std::sqrt(mi * mj));
     }
     mu = std::max(mu, row);
@@ -103,12 +103,12 @@ Snapshot FastSimulator::snapshot() const {
   Snapshot s;
   for (int id = 0; id < V.size(); ++id) {
     const int v = V.phys[id];
-    const bool alive = V.m[v] > 0;
+    const bool alive = V.mass(v) > 0;
     s.vertex_alive.push_back(alive);
     s.rest.push_back(alive ? Vec3d{V.rx[v], V.ry[v], V.rz[v]} : Vec3d{});
-    s.position.push_back(alive ? Vec3d{V.x[v], V.y[v], V.z[v]} : Vec3d{});
-    s.velocity.push_back(alive ? Vec3d{V.vx[v], V.vy[v], V.vz[v]} : Vec3d{});
-    s.mass.push_back(alive ? V.m[v] : 0.0);
+    s.position.push_back(alive ? Vec3d{V.xm[v].x, V.xm[v].y, V.xm[v].z} : Vec3d{});
+    s.velocity.push_back(alive ? Vec3d{V.vm[v].x, V.vm[v].y, V.vm[v].z} : Vec3d{});
+    s.mass.push_back(alive ? V.mass(v) : 0.0);
   }
   auto vid = [&](int v) { return v >= 0 ? int(V.lid[v]) : v; };
   for (int id = 0; id < topo_.E.size(); ++id) {
@@ -140,7 +140,7 @@ std::vector<Vec3d> FastSimulator::normals() const {
   std::vector<Vec3d> out;
   for (int id = 0; id < tmp.topo_.V.size(); ++id) {
     const int v = tmp.topo_.V.phys[id];
-    out.push_back({tmp.topo_.V.nx[v], tmp.topo_.V.ny[v], tmp.topo_.V.nz[v]});
+    out.push_back({tmp.topo_.V.nr[v].x, tmp.topo_.V.nr[v].y, tmp.topo_.V.nr[v].z});
   }
   return out;
 }
@@ -163,9 +163,9 @@ void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec
   Vertices& V = topo_.V;
   for (int k = 0; k < V.size() && k < int(x.size()) && k < int(v.size()); ++k) {
     const int s = V.phys[k];
-    if (!(V.m[s] > 0)) continue;
-    V.x[s] = float(x[k][0]), V.y[s] = float(x[k][1]), V.z[s] = float(x[k][2]);
-    V.vx[s] = float(v[k][0]), V.vy[s] = float(v[k][1]), V.vz[s] = float(v[k][2]);
+    if (!(V.mass(s) > 0)) continue;
+    V.xm[s].x = float(x[k][0]), V.xm[s].y = float(x[k][1]), V.xm[s].z = float(x[k][2]);
+    V.vm[s].x = float(v[k][0]), V.vm[s].y = float(v[k][1]), V.vm[s].z = float(v[k][2]);
   }
   normals_valid_ = false;
 }
@@ -173,7 +173,7 @@ void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec
 void FastSimulator::set_masses(const std::vector<double>& m) {
   Vertices& V = topo_.V;
   for (int k = 0; k < V.size() && k < int(m.size()); ++k)
-    if (V.m[V.phys[k]] > 0) V.m[V.phys[k]] = float(m[k]);
+    if (V.mass(V.phys[k]) > 0) V.set_mass(V.phys[k], float(m[k]));
 }
 
 }  // namespace crumple::fast

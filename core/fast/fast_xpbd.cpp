@@ -11,7 +11,7 @@ namespace crumple::fast {
 // h f drops out of the rows and of the momentum drift, which is all that h multiplies there.
 void FastSimulator::viscous_step(const StepConstants& c) {
   const int n = topo_.V.size();
-  par_.run(n, kPassGrain, [&](int b, int e) { viscous_guess(topo_, step_.rows, c, step_.g.data(), b, e); });
+  par_.run(n, kPassGrain, [&](int b, int e) { viscous_guess(topo_, c, step_.g.data(), b, e); });
   StepConstants rows_only = c;
   rows_only.h = 0;
   float corr[3];
@@ -37,7 +37,7 @@ void FastSimulator::integrate_xpbd() {
   for (int color = 0; color < colors_.colors(); ++color) {
     const std::int32_t* slots = colors_.slots(color);
     par_.run(colors_.count(color), kPassGrain,
-             [&](int b, int e) { xpbd_project(topo_.E, step_.rows, xc, slots, disp, b, e); });
+             [&](int b, int e) { xpbd_project(topo_.E, topo_.V, xc, slots, disp, b, e); });
   }
   par_.run(n, kPassGrain, [&](int b, int e) { displacement_to_velocity(c.h, disp, b, e); });
   const float none[3] = {0, 0, 0};

@@ -26,12 +26,11 @@ namespace crumple::fast {
 namespace {
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
                          const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
-                         const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                         float unit, Float4* __restrict area, int begin, int end) {
+                         const Float4* __restrict xm, float unit, Float4* __restrict area, int begin, int end) {
   for (int t = begin; t < end; ++t) {
-    const int a = v0[t], b = v1[t], c = v2[t];
-    const float ux = (x[b] - x[a]) * unit, uy = (y[b] - y[a]) * unit, uz = (z[b] - z[a]) * unit;
-    const float wx = (x[c] - x[a]) * unit, wy = (y[c] - y[a]) * unit, wz = (z[c] - z[a]) * unit;
+    const Float4 pa = xm[v0[t]], pb = xm[v1[t]], pc = xm[v2[t]];
+    const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
+    const float wx = (pc.x - pa.x) * unit, wy = (pc.y - pa.y) * unit, wz = (pc.z - pa.z) * unit;
     const float on = alive[t] ? 1.0f : 0.0f;
     area[t] = Float4{on * (uy * wz - uz * wy), on * (uz * wx - ux * wz), on * (ux * wy - uy * wx), 0.0f};
   }
@@ -39,8 +38,8 @@ CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0
 }  // namespace
 
 void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end) {
-  triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.x.data(), m.V.y.data(),
-                      m.V.z.data(), unit, area, begin, end);
+  triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.xm.data(), unit, area,
+                      begin, end);
 }
 
 namespace {
@@ -74,12 +73,12 @@ void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, 
 }
 }  // namespace
 
-void vertex_normals(const Topology& m, NormalsOut n_out, int begin, int end) {
+void vertex_normals(const Topology& m, Float4* normals, int begin, int end) {
   const std::int32_t* __restrict at = m.V.at_t.data();
   const std::int32_t* __restrict tris = m.V.tris.data();
   const std::uint16_t* __restrict count = m.V.n_tris.data();
   const Float4* __restrict area = m.T.area.data();
-  float *__restrict nx = n_out.x, *__restrict ny = n_out.y, *__restrict nz = n_out.z;
+  Float4* __restrict n_out = normals;
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
     const std::int32_t* list = tris + at[v];
@@ -88,30 +87,8 @@ void vertex_normals(const Topology& m, NormalsOut n_out, int begin, int end) {
     const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
     const float inv = len > 0 ? 1.0f / len : 0.0f;
-    nx[v] = sx * inv;
-    ny[v] = sy * inv;
-    nz[v] = sz * inv;
+    n_out[v] = Float4{sx * inv, sy * inv, sz * inv, 0.0f};
   }
-}
-
-namespace {
-void pack_rows_body(const float* __restrict x, const float* __restrict y, const float* __restrict z,
-                    const float* __restrict vx, const float* __restrict vy, const float* __restrict vz,
-                    const float* __restrict m, const float* __restrict nx, const float* __restrict ny,
-                    const float* __restrict nz, Float4* __restrict xm, Float4* __restrict vm, Float4* __restrict nr,
-                    int begin, int end) {
-  CRUMPLE_SIMD_LOOP
-  for (int v = begin; v < end; ++v) {
-    xm[v] = Float4{x[v], y[v], z[v], m[v]};
-    vm[v] = Float4{vx[v], vy[v], vz[v], m[v]};
-    nr[v] = Float4{nx[v], ny[v], nz[v], 0.0f};
-  }
-}
-}  // namespace
-
-void pack_rows(const Vertices& V, PackedRows& rows, int begin, int end) {
-  pack_rows_body(V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), V.m.data(), V.nx.data(),
-                 V.ny.data(), V.nz.data(), rows.xm.data(), rows.vm.data(), rows.nr.data(), begin, end);
 }
 
 namespace {
@@ -129,7 +106,7 @@ inline Stencil stencil(const Edges& E, int e) {
 #if CRUMPLE_LANES8
 // The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
 // range's last edge in the lanes past it and stores only its own lanes.
-void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* __restrict out,
+void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* __restrict out,
                       int begin, int end) {
   using namespace lanes8;
   const __m256 kappa = _mm256_set1_ps(c.kappa), damping = _mm256_set1_ps(c.damping), bend = _mm256_set1_ps(c.bend);
@@ -147,10 +124,10 @@ void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstant
       dst[k] = e0 + k < end ? &out[e0 + k].fx : &spare[k].fx;
     }
     __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
-    load_rows(rows.xm.data(), a, xa, ya, za, ma);
-    load_rows(rows.xm.data(), b, xb, yb, zb, mb);
-    load_rows(rows.vm.data(), a, vxa, vya, vza, unused);
-    load_rows(rows.vm.data(), b, vxb, vyb, vzb, unused);
+    load_rows(V.xm.data(), a, xa, ya, za, ma);
+    load_rows(V.xm.data(), b, xb, yb, zb, mb);
+    load_rows(V.vm.data(), a, vxa, vya, vza, unused);
+    load_rows(V.vm.data(), b, vxb, vyb, vzb, unused);
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const __m256 dx = xa - xb, dy = ya - yb, dz = za - zb;
     const __m256 lt = _mm256_sqrt_ps(dx * dx + dy * dy + dz * dz);
@@ -160,12 +137,12 @@ void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstant
     const __m256 s = (-kappa * (lt - _mm256_load_ps(rest)) - damping * rel) * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     __m256 nxa, nya, nza, nxb, nyb, nzb, nxl, nyl, nzl, nxr, nyr, nzr, xl, yl, zl, xr, yr, zr;
-    load_rows(rows.nr.data(), a, nxa, nya, nza, unused);
-    load_rows(rows.nr.data(), b, nxb, nyb, nzb, unused);
-    load_rows(rows.nr.data(), l, nxl, nyl, nzl, unused);
-    load_rows(rows.nr.data(), r, nxr, nyr, nzr, unused);
-    load_rows(rows.xm.data(), l, xl, yl, zl, unused);
-    load_rows(rows.xm.data(), r, xr, yr, zr, unused);
+    load_rows(V.nr.data(), a, nxa, nya, nza, unused);
+    load_rows(V.nr.data(), b, nxb, nyb, nzb, unused);
+    load_rows(V.nr.data(), l, nxl, nyl, nzl, unused);
+    load_rows(V.nr.data(), r, nxr, nyr, nzr, unused);
+    load_rows(V.xm.data(), l, xl, yl, zl, unused);
+    load_rows(V.xm.data(), r, xr, yr, zr, unused);
     const __m256 nrl = nxr * nxl + nyr * nyl + nzr * nzl;
     const __m256 Bmag = (one - nrl) * lt * half;
     const __m256 gx = (xr + nxr) - (xl + nxl), gy = (yr + nyr) - (yl + nyl), gz = (zr + nzr) - (zl + nzl);
@@ -180,13 +157,13 @@ void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstant
 }
 #else
 // The same pass one edge at a time (a target without AVX2, or the no-SIMD build).
-CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const PackedRows& rows, const StepConstants& c,
+CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
                                             EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
     const Stencil q = stencil(E, e);
-    const Float4 pa = rows.xm[q.a], pb = rows.xm[q.b], va = rows.vm[q.a], vb = rows.vm[q.b];
-    const Float4 na = rows.nr[q.a], nb = rows.nr[q.b], nl = rows.nr[q.l], nr = rows.nr[q.r], pl = rows.xm[q.l], pr = rows.xm[q.r];
+    const Float4 pa = V.xm[q.a], pb = V.xm[q.b], va = V.vm[q.a], vb = V.vm[q.b];
+    const Float4 na = V.nr[q.a], nb = V.nr[q.b], nl = V.nr[q.l], nr = V.nr[q.r], pl = V.xm[q.l], pr = V.xm[q.r];
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const float dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
@@ -210,8 +187,8 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const PackedRows& ro
 #endif
 }  // namespace
 
-void edge_forces(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* out, int begin, int end) {
-  edge_forces_body(E, rows, c, out, begin, end);
+void edge_forces(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* out, int begin, int end) {
+  edge_forces_body(E, V, c, out, begin, end);
 }
 
 namespace {
@@ -228,11 +205,11 @@ const Row kAsEndpoint[2] = {
 const Row kAsWing{{0, 0, 0, 1, 1, 1, 1, 0}};
 }  // namespace
 
-void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* records, const StepConstants& c,
-                   VertexForces& f, Float4* g, int begin, int end) {
+void gather_forces(const Topology& m, const EdgeOut* records, const StepConstants& c, VertexForces& f, Float4* g,
+                   int begin, int end) {
   const Vertices& V = m.V;
   const EdgeOut* __restrict out = records;
-  const Float4* __restrict vm = rows.vm.data();
+  const Float4* __restrict vm = V.vm.data();
   for (int v = begin; v < end; ++v) {
     if (v + kAhead < end) {
       const int a = v + kAhead;
@@ -265,9 +242,10 @@ void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* rec
     float fx = sum[0], fy = sum[1], fz = sum[2];
     const float kn = sum[3], mx = sum[4], my = sum[5], mz = sum[6];  // f = -k n_v (hinge), +k n_v (wing), - mean
     const float jx = j[0], jy = j[1], jz = j[2];                     // sum of W_e (v_other - v_v)
-    fx += kn * V.nx[v] - mx;
-    fy += kn * V.ny[v] - my;
-    fz += kn * V.nz[v] - mz - mass * c.gravity;
+    const Float4 n = V.nr[v];
+    fx += kn * n.x - mx;
+    fy += kn * n.y - my;
+    fz += kn * n.z - mz - mass * c.gravity;
     f.fx[v] = fx;
     f.fy[v] = fy;
     f.fz[v] = fz;
@@ -291,7 +269,8 @@ void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants&
   const Float4* __restrict g = g_in;
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
-    const float mass = V.m[v];
+    const Float4 vel = V.vm[v];
+    const float mass = vel.w;
     const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     const int n = V.n_springs[v];
     auto add = [&](const Float4* p) {
@@ -304,17 +283,18 @@ void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants&
     for (int k = kFixed; k < n; ++k) add(&g[nbrs[k]]);
     const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float inv = 1.0f / (mass + f.ksum[v] + (mass > 0 ? 0.0f : 1.0f));
-    g_next[v] = Float4{(mass * V.vx[v] + c.h * f.fx[v] + sx) * inv,
-                       (mass * V.vy[v] + c.h * f.fy[v] + sy) * inv,
-                       (mass * V.vz[v] + c.h * f.fz[v] + sz) * inv, mass};
+    g_next[v] = Float4{(mass * vel.x + c.h * f.fx[v] + sx) * inv,
+                       (mass * vel.y + c.h * f.fy[v] + sy) * inv,
+                       (mass * vel.z + c.h * f.fz[v] + sz) * inv, mass};
   }
 }
 
 void explicit_velocity(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* g, int begin,
                        int end) {
   for (int v = begin; v < end; ++v) {
-    const float inv = V.m[v] > 0 ? c.h / V.m[v] : 0.0f;
-    g[v] = Float4{V.vx[v] + f.fx[v] * inv, V.vy[v] + f.fy[v] * inv, V.vz[v] + f.fz[v] * inv, V.m[v]};
+    const Float4 vel = V.vm[v];
+    const float inv = vel.w > 0 ? c.h / vel.w : 0.0f;
+    g[v] = Float4{vel.x + f.fx[v] * inv, vel.y + f.fy[v] * inv, vel.z + f.fz[v] * inv, vel.w};
   }
 }
 
@@ -322,10 +302,11 @@ void momentum_drift(const Vertices& V, const VertexForces& f, const Float4* g, c
                     int end, double out[4]) {
   double sx = 0, sy = 0, sz = 0, mass = 0;
   for (int v = begin; v < end; ++v) {
-    sx += double(V.m[v]) * (double(g[v].x) - V.vx[v]) - double(c.h) * f.fx[v];
-    sy += double(V.m[v]) * (double(g[v].y) - V.vy[v]) - double(c.h) * f.fy[v];
-    sz += double(V.m[v]) * (double(g[v].z) - V.vz[v]) - double(c.h) * f.fz[v];
-    mass += V.m[v];
+    const Float4 vel = V.vm[v];
+    sx += double(vel.w) * (double(g[v].x) - vel.x) - double(c.h) * f.fx[v];
+    sy += double(vel.w) * (double(g[v].y) - vel.y) - double(c.h) * f.fy[v];
+    sz += double(vel.w) * (double(g[v].z) - vel.z) - double(c.h) * f.fz[v];
+    mass += vel.w;
   }
   out[0] = sx;
   out[1] = sy;
@@ -339,16 +320,16 @@ namespace {
 // AVX2 has no masked ones), so each case gets its own branch-free loop.
 template <bool sphere>
 void advance_body(const StepConstants& c, const float corr[3], const float center[3], float radius,
-                  float* __restrict x, float* __restrict y, float* __restrict z, float* __restrict vx,
-                  float* __restrict vy, float* __restrict vz, const Float4* __restrict g,
-                  const float* __restrict mass, int begin, int end) {
+                  Float4* __restrict xm, Float4* __restrict vm, const Float4* __restrict g, int begin,
+                  int end) {
   // The constants as locals: read through pointers inside the loop they stop it from vectorizing.
   const float h = c.h, c0 = corr[0], c1 = corr[1], c2 = corr[2], s0 = center[0], s1 = center[1], s2 = center[2];
   CRUMPLE_SIMD_LOOP
   for (int v = begin; v < end; ++v) {
-    const float on = mass[v] > 0 ? 1.0f : 0.0f;
+    const Float4 p = xm[v];
+    const float on = p.w > 0 ? 1.0f : 0.0f;
     float ux = on * (g[v].x - c0), uy = on * (g[v].y - c1), uz = on * (g[v].z - c2);
-    float px = x[v] + h * ux, py = y[v] + h * uy, pz = z[v] + h * uz;
+    float px = p.x + h * ux, py = p.y + h * uy, pz = p.z + h * uz;
     if constexpr (sphere) {
       // The manipulation sphere (§8): onto the sphere, outward velocity removed.
       const float dx = px - s0, dy = py - s1, dz = pz - s2;
@@ -366,12 +347,8 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
       uy -= cut * ny;
       uz -= cut * nz;
     }
-    x[v] = px;
-    y[v] = py;
-    z[v] = pz;
-    vx[v] = ux;
-    vy[v] = uy;
-    vz[v] = uz;
+    xm[v] = Float4{px, py, pz, p.w};
+    vm[v] = Float4{ux, uy, uz, p.w};
   }
 }
 }  // namespace
@@ -379,8 +356,7 @@ void advance_body(const StepConstants& c, const float corr[3], const float cente
 void advance(const Float4* g, const StepConstants& c, const float corr[3], const float center[3], float radius,
              Vertices& V, int begin, int end) {
   auto run = [&](auto body) {
-    body(c, corr, center, radius, V.x.data(), V.y.data(), V.z.data(), V.vx.data(), V.vy.data(), V.vz.data(), g,
-         V.m.data(), begin, end);
+    body(c, corr, center, radius, V.xm.data(), V.vm.data(), g, begin, end);
   };
   if (radius > 0) run(advance_body<true>);
   else run(advance_body<false>);
@@ -398,10 +374,9 @@ namespace {
 // code.
 template <bool exact_step>
 CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord* __restrict edges,
-                                      const std::int32_t* __restrict lid, const float* __restrict x,
-                                      const float* __restrict y, const float* __restrict z,
-                                      const float* __restrict nx, const float* __restrict ny,
-                                      const float* __restrict nz, std::uint8_t* __restrict out, int begin, int end) {
+                                      const std::int32_t* __restrict lid, const Float4* __restrict xm,
+                                      const Float4* __restrict nr, std::uint8_t* __restrict out, int begin,
+                                      int end) {
   const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
   const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent,
               budget = c.budget, unit = c.unit;
@@ -414,11 +389,12 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord*
     // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
     // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
     // every compressed edge broke at once).
-    const float dx = (x[a] - x[b]) * unit, dy = (y[a] - y[b]) * unit, dz = (z[a] - z[b]) * unit;
+    const Float4 pa = xm[a], pb = xm[b], na = nr[a], nb = nr[b], nl = nr[l], nrr = nr[r];
+    const float dx = (pa.x - pb.x) * unit, dy = (pa.y - pb.y) * unit, dz = (pa.z - pb.z) * unit;
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = edge.l0 * unit;
     const float comp = 1.0f - lt / rest;
-    const float nij = nx[a] * nx[b] + ny[a] * ny[b] + nz[a] * nz[b];
-    const float dot_rl = nx[r] * nx[l] + ny[r] * ny[l] + nz[r] * nz[l];  // l, r are 0 without wings
+    const float nij = na.x * nb.x + na.y * nb.y + na.z * nb.z;
+    const float dot_rl = nrr.x * nl.x + nrr.y * nl.y + nrr.z * nl.z;  // l, r are 0 without wings
     const float nrl = two_wings ? dot_rl : 1.0f;
     const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
     // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
@@ -442,8 +418,7 @@ void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, i
   const Vertices& V = m.V;
   const Edges& E = m.E;
   auto run = [&](auto body) {
-    body(c, E.slots.data(), E.lid.data(), V.x.data(), V.y.data(), V.z.data(), V.nx.data(), V.ny.data(), V.nz.data(),
-         out, begin, end);
+    body(c, E.slots.data(), E.lid.data(), V.xm.data(), V.nr.data(), out, begin, end);
   };
   if (c.step_exponent == 1.0f) run(adapt_body<true>);
   else run(adapt_body<false>);

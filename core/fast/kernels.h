@@ -36,34 +36,29 @@ struct StepConstants {
 /// before the product, which changes no normal's bits and keeps a tiny mesh's products out of
 /// float's subnormals.                                                                 §1
 void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end);
-/// Where vertex_normals writes n_v (the mesh's own nx, ny, nz: the normals outlive the step).
-struct NormalsOut {
-  float *x, *y, *z;
-};
-/// n_v = normalized sum of the area vectors (m.T.area) of v's triangles.                §1
-void vertex_normals(const Topology& m, NormalsOut n, int begin, int end);
-/// Packs position, velocity, mass and normal into the 16-byte rows of step_scratch.h.
-void pack_rows(const Vertices& V, PackedRows& rows, int begin, int end);
-/// Per edge, from the packed rows, into out[e]: the spring force on endpoint a (Hookean with
+/// n_v = normalized sum of the area vectors (m.T.area) of v's triangles, into normals[v] (the
+/// mesh's own V.nr: the normals outlive the step).                                      §1
+void vertex_normals(const Topology& m, Float4* normals, int begin, int end);
+/// Per edge, from the vertex rows, into out[e]: the spring force on endpoint a (Hookean with
 /// kappa_e [Eq 5], damping), and the bending magnitude s C_beta B and balanced mean of its
 /// stencil [Eq 8-9].
-void edge_forces(const Edges& E, const PackedRows& rows, const StepConstants& c, EdgeOut* out, int begin, int end);
+void edge_forces(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* out, int begin, int end);
 /// Per vertex: gathers f_v, sum W_e and sum W_e (v_o - v_v) over its springs (the edge records
 /// and the neighbours' rows) into f, and writes the first Jacobi guess g (the predictor, §3)
 /// with m_v in w.
-void gather_forces(const Topology& m, const PackedRows& rows, const EdgeOut* records, const StepConstants& c,
-                   VertexForces& f, Float4* g, int begin, int end);
+void gather_forces(const Topology& m, const EdgeOut* records, const StepConstants& c, VertexForces& f, Float4* g,
+                   int begin, int end);
 /// One Jacobi sweep of the implicit velocity step (approx, viscosity): reads g, writes g_next. §3
 void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants& c, const Float4* g,
                   Float4* g_next, int begin, int end);
 /// The axial Jacobian (MODEL.md §3): per vertex, W = sum_e W_e over its springs, u along each
-/// spring from the packed positions, into wsum; then the first guess into g as gather_forces
+/// spring from the positions, into wsum; then the first guess into g as gather_forces
 /// writes it for the isotropic step, with the 3 x 3 rows (reads the forces gather_forces summed).
-void axial_blocks(const Topology& m, const PackedRows& rows, const VertexForces& f, const StepConstants& c,
-                  Block3* wsum, Float4* g, int begin, int end);
+void axial_blocks(const Topology& m, const VertexForces& f, const StepConstants& c, Block3* wsum, Float4* g,
+                  int begin, int end);
 /// One Jacobi sweep with the axial blocks: (m I + W) g_next = m v + h f + sum_e W_e g_o.     §3
-void axial_sweep(const Topology& m, const PackedRows& rows, const VertexForces& f, const Block3* wsum,
-                 const StepConstants& c, const Float4* g, Float4* g_next, int begin, int end);
+void axial_sweep(const Topology& m, const VertexForces& f, const Block3* wsum, const StepConstants& c,
+                 const Float4* g, Float4* g_next, int begin, int end);
 /// Symplectic Euler's new velocity into g: v + h f / m.                               §3
 void explicit_velocity(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* g, int begin,
                        int end);
@@ -85,7 +80,7 @@ struct XpbdConstants {
 };
 /// The viscosity's step alone (D19's operator splitting): the first guess of the implicit
 /// velocity step with W_e = h c_e I and no force but gravity's acceleration in the predictor.
-void viscous_guess(const Topology& m, const PackedRows& rows, const StepConstants& c, Float4* g, int begin, int end);
+void viscous_guess(const Topology& m, const StepConstants& c, Float4* g, int begin, int end);
 /// v = g - correction into V's velocities (live slots; dead ones get 0).
 void take_velocity(const Float4* g, const float correction[3], Vertices& V, int begin, int end);
 /// d = h (v + h f / m) and w = 1 / m (0 for a dead slot) into disp.
@@ -94,7 +89,7 @@ void xpbd_predict(const Vertices& V, const VertexForces& f, const StepConstants&
 /// Projects the distance constraints of the edge slots slots[begin, end), which share no vertex
 /// (one colour of ConstraintColors): dlambda = -C / (w_a + w_b + alpha~), d_a += w_a dlambda u,
 /// d_b -= w_b dlambda u.
-void xpbd_project(const Edges& E, const PackedRows& rows, const XpbdConstants& c, const std::int32_t* slots,
+void xpbd_project(const Edges& E, const Vertices& V, const XpbdConstants& c, const std::int32_t* slots,
                   Float4* disp, int begin, int end);
 /// g = d / h: the step's velocity, which advance() then turns back into x + h v.
 void displacement_to_velocity(float h, Float4* g, int begin, int end);

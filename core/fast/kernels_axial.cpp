@@ -54,20 +54,20 @@ inline Vec solve_row(float d, float s, const Block3& S, const Vec& r) {
 }
 }  // namespace
 
-void axial_blocks(const Topology& m, const PackedRows& rows, const VertexForces& f, const StepConstants& c,
-                  Block3* wsum, Float4* g, int begin, int end) {
+void axial_blocks(const Topology& m, const VertexForces& f, const StepConstants& c, Block3* wsum, Float4* g,
+                  int begin, int end) {
   const Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
-    const Float4 self = rows.xm[v], vel = rows.vm[v];
+    const Float4 self = V.xm[v], vel = V.vm[v];
     const float mass = self.w;
     const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     Block3 S;
     Vec j;  // sum of W_e (v_o - v_v)
     for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
       const int o = nbrs[k];
-      const SpringBlock W = spring_block(self, rows.xm[o], c);
+      const SpringBlock W = spring_block(self, V.xm[o], c);
       add_block(W, S);
-      add_times(W, rows.vm[o].x - vel.x, rows.vm[o].y - vel.y, rows.vm[o].z - vel.z, j);
+      add_times(W, V.vm[o].x - vel.x, V.vm[o].y - vel.y, V.vm[o].z - vel.z, j);
     }
     wsum[v] = S;
     const float d = mass > 0 ? mass : 1.0f;  // a dead slot: an identity row
@@ -83,17 +83,17 @@ void axial_blocks(const Topology& m, const PackedRows& rows, const VertexForces&
   }
 }
 
-void axial_sweep(const Topology& m, const PackedRows& rows, const VertexForces& f, const Block3* wsum,
-                 const StepConstants& c, const Float4* g, Float4* g_next, int begin, int end) {
+void axial_sweep(const Topology& m, const VertexForces& f, const Block3* wsum, const StepConstants& c,
+                 const Float4* g, Float4* g_next, int begin, int end) {
   const Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
-    const Float4 self = rows.xm[v], vel = rows.vm[v];
+    const Float4 self = V.xm[v], vel = V.vm[v];
     const float mass = self.w;
     const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     Vec sum;  // sum of W_e g_o
     for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
       const int o = nbrs[k];
-      add_times(spring_block(self, rows.xm[o], c), g[o].x, g[o].y, g[o].z, sum);
+      add_times(spring_block(self, V.xm[o], c), g[o].x, g[o].y, g[o].z, sum);
     }
     const Vec r{mass * vel.x + c.h * f.fx[v] + sum.x, mass * vel.y + c.h * f.fy[v] + sum.y,
                 mass * vel.z + c.h * f.fz[v] + sum.z};

@@ -9,15 +9,14 @@
 
 namespace crumple::fast {
 
-void viscous_guess(const Topology& m, const PackedRows& rows, const StepConstants& c, Float4* g, int begin,
-                   int end) {
+void viscous_guess(const Topology& m, const StepConstants& c, Float4* g, int begin, int end) {
   const Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
-    const Float4 self = rows.vm[v];
+    const Float4 self = V.vm[v];
     const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
     float ks = 0, jx = 0, jy = 0, jz = 0;  // sum W_e and sum W_e (v_o - v), W_e = h c_e I
     for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
-      const Float4 o = rows.vm[nbrs[k]];
+      const Float4 o = V.vm[nbrs[k]];
       const float w = c.implicit * (self.w + o.w);
       ks += w;
       jx += w * (o.x - self.x), jy += w * (o.y - self.y), jz += w * (o.z - self.z);
@@ -34,27 +33,26 @@ void viscous_guess(const Topology& m, const PackedRows& rows, const StepConstant
 
 void take_velocity(const Float4* g, const float correction[3], Vertices& V, int begin, int end) {
   for (int v = begin; v < end; ++v) {
-    const float on = V.m[v] > 0 ? 1.0f : 0.0f;
-    V.vx[v] = on * (g[v].x - correction[0]);
-    V.vy[v] = on * (g[v].y - correction[1]);
-    V.vz[v] = on * (g[v].z - correction[2]);
+    const float mass = V.vm[v].w, on = mass > 0 ? 1.0f : 0.0f;
+    V.vm[v] = Float4{on * (g[v].x - correction[0]), on * (g[v].y - correction[1]), on * (g[v].z - correction[2]), mass};
   }
 }
 
 void xpbd_predict(const Vertices& V, const VertexForces& f, const StepConstants& c, Float4* disp, int begin,
                   int end) {
   for (int v = begin; v < end; ++v) {
-    const float mass = V.m[v], w = mass > 0 ? 1.0f / mass : 0.0f;
-    disp[v] = Float4{c.h * (V.vx[v] + c.h * f.fx[v] * w), c.h * (V.vy[v] + c.h * f.fy[v] * w),
-                     c.h * (V.vz[v] + c.h * f.fz[v] * w), w};
+    const Float4 vel = V.vm[v];
+    const float w = vel.w > 0 ? 1.0f / vel.w : 0.0f;
+    disp[v] = Float4{c.h * (vel.x + c.h * f.fx[v] * w), c.h * (vel.y + c.h * f.fy[v] * w),
+                     c.h * (vel.z + c.h * f.fz[v] * w), w};
   }
 }
 
-void xpbd_project(const Edges& E, const PackedRows& rows, const XpbdConstants& c, const std::int32_t* slots,
+void xpbd_project(const Edges& E, const Vertices& V, const XpbdConstants& c, const std::int32_t* slots,
                   Float4* disp, int begin, int end) {
   for (int k = begin; k < end; ++k) {
     const int e = slots[k], a = E[e].a, b = E[e].b;
-    const Float4 pa = rows.xm[a], pb = rows.xm[b];
+    const Float4 pa = V.xm[a], pb = V.xm[b];
     Float4& da = disp[a];
     Float4& db = disp[b];
     if (da.w + db.w == 0) continue;  // both ends pinned

@@ -170,7 +170,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int n = V.size();
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int v = 0; v < n; ++v) {
-    if (!(V.m[v] > 0)) continue;
+    if (!(V.mass(v) > 0)) continue;
     const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], r[d]), hi[d] = std::max(hi[d], r[d]);
   }
@@ -181,7 +181,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   s.code.resize(n);
   par.run(n, kGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
-      if (!(V.m[v] > 0)) {
+      if (!(V.mass(v) > 0)) {
         s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
         continue;
       }
@@ -259,8 +259,8 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
   // next step before anything reads them), then the adjacency lists with their entries renamed.
-  for (Array<float>* a : {&V.x, &V.y, &V.z, &V.vx, &V.vy, &V.vz, &V.m, &V.nx, &V.ny, &V.nz, &V.rx, &V.ry, &V.rz})
-    permute(par, s, *a, vorder);
+  for (Array<Float4>* a : {&V.xm, &V.vm, &V.nr}) permute(par, s, *a, vorder);
+  for (Array<float>* a : {&V.rx, &V.ry, &V.rz}) permute(par, s, *a, vorder);
   permute(par, s, V.n_springs, vorder);
   permute(par, s, V.n_tris, vorder);
   permute(par, s, V.lid, vorder);

@@ -12,22 +12,14 @@
 namespace crumple::fast {
 
 /// What the edge pass leaves for the vertex gather: what the gather cannot compute from the two
-/// endpoints' rows (their velocities and masses give the implicit block W_e and W_e (v_b - v_a),
-/// so those are not stored). 32 bytes, two records to a cache line: the edge pass writes them in
+/// endpoints' vertex rows (their velocities and masses give the implicit block W_e and
+/// W_e (v_b - v_a), so those are not stored). 32 bytes, two records to a cache line: the edge pass writes them in
 /// order with whole 16-byte stores, the gather reads them at random.
 struct alignas(32) EdgeOut {
   float fx = 0, fy = 0, fz = 0;  ///< spring force on a (b gets the opposite)
   float kb = 0;                  ///< bending magnitude s C_beta B [Eq 8-9] (0: none)
   float bx = 0, by = 0, bz = 0;  ///< balanced form: mean of the stencil's four forces
   float pad = 0;                 ///< to 32 bytes
-};
-
-/// Position, velocity and normal of every vertex slot packed in 16-byte rows (pack_rows), so
-/// that a random neighbour costs one load per quantity, not one line per SoA array.
-struct PackedRows {
-  Array<Float4> xm;  ///< (x, y, z, m)
-  Array<Float4> vm;  ///< (vx, vy, vz, m)
-  Array<Float4> nr;  ///< (nx, ny, nz, 0)
 };
 
 /// What the gather sums per vertex slot (gather_forces) and the integrators read.
@@ -44,7 +36,6 @@ struct alignas(32) Block3 {
 };
 
 struct StepScratch {
-  PackedRows rows;
   Array<EdgeOut> edge_out;  ///< per edge slot: the edge pass's record for the gather
   VertexForces forces;
   Array<Float4> g;          ///< Jacobi guess of v_k' (MODEL.md §3) in x, y, z and m_k in w:
@@ -55,7 +46,7 @@ struct StepScratch {
 
   /// Room for this many slots without reallocating (growth past it is geometric).
   void reserve(std::size_t vertices, std::size_t edges) {
-    for (Array<Float4>* a : {&rows.xm, &rows.vm, &rows.nr, &g, &g_next}) a->reserve_warm(vertices);
+    for (Array<Float4>* a : {&g, &g_next}) a->reserve_warm(vertices);
     for (Array<float>* a : {&forces.fx, &forces.fy, &forces.fz, &forces.ksum}) a->reserve_warm(vertices);
     edge_out.reserve_warm(edges);
   }
@@ -63,7 +54,7 @@ struct StepScratch {
   void fit(const Topology& m) {
     const std::size_t nv = std::size_t(m.V.size()), ne = std::size_t(m.E.size());
     if (g.size() != nv) {
-      for (Array<Float4>* a : {&rows.xm, &rows.vm, &rows.nr, &g, &g_next}) a->resize(nv), a->keep_warm();
+      for (Array<Float4>* a : {&g, &g_next}) a->resize(nv), a->keep_warm();
       for (Array<float>* a : {&forces.fx, &forces.fy, &forces.fz, &forces.ksum}) a->resize(nv), a->keep_warm();
     }
     if (edge_out.size() != ne) edge_out.resize(ne), edge_out.keep_warm();

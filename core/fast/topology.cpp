@@ -35,7 +35,7 @@ void reserve_all(std::size_t n, A&... arrays) {
 }  // namespace
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
-  reserve_all(nv, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
+  reserve_all(nv, V.xm, V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.slots, E.lid, E.phys);
@@ -92,8 +92,8 @@ std::int32_t append_block(Array<std::int32_t>& list, Array<std::int32_t>& parall
 }  // namespace
 
 void Topology::fit() {
-  if (const std::size_t n = V.lid.size(), old = V.m.size(); n != old) {
-    grow(n, V.x, V.y, V.z, V.vx, V.vy, V.vz, V.m, V.nx, V.ny, V.nz, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
+  if (const std::size_t n = V.lid.size(), old = V.xm.size(); n != old) {
+    grow(n, V.xm, V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
     // One block of the least room per new slot, in slot order.
     const std::int32_t at_e = append_block(V.springs, V.nbrs, (n - old) * kMinRoom);
     const std::int32_t at_t = append_block(V.tris, V.wings, (n - old) * kMinRoom);
@@ -110,8 +110,8 @@ void Topology::fit() {
 }
 
 void Topology::release_vertex(int v) {
-  V.x[v] = V.y[v] = V.z[v] = V.vx[v] = V.vy[v] = V.vz[v] = V.m[v] = 0;
-  V.nx[v] = V.ny[v] = V.nz[v] = V.rx[v] = V.ry[v] = V.rz[v] = 0;
+  V.xm[v] = V.vm[v] = V.nr[v] = Float4{};
+  V.rx[v] = V.ry[v] = V.rz[v] = 0;
   V.n_springs[v] = V.n_tris[v] = 0;
 }
 
@@ -327,7 +327,7 @@ std::string Topology::check() const {
       if (lid[k] < 0 || std::size_t(lid[k]) >= phys.size() || phys[std::size_t(lid[k])] != std::int32_t(k)) return false;
     return true;
   };
-  if (!bijective(V.lid, V.phys) || V.lid.size() != V.m.size()) return fail("vertex logical ids are not a bijection");
+  if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return fail("vertex logical ids are not a bijection");
   if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return fail("edge logical ids are not a bijection");
   if (!bijective(T.lid, T.phys) || T.lid.size() != T.v0.size()) return fail("triangle logical ids are not a bijection");
   std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
@@ -379,8 +379,9 @@ std::string Topology::check() const {
     if (!pairs.insert({std::min(a, b), std::max(a, b)}).second) return fail("two mesh edges join ", a, " and ", b);
   }
   for (int v = 0; v < V.size(); ++v) {
+    if (!(V.vm[v].w == V.xm[v].w)) return fail("vertex ", v, " has two masses ", V.xm[v].w, " and ", V.vm[v].w);
     if (vertex_dead[v]) continue;
-    if (!(V.m[v] > 0) || !std::isfinite(V.m[v])) return fail("vertex ", v, " has mass ", V.m[v]);
+    if (!(V.mass(v) > 0) || !std::isfinite(V.mass(v))) return fail("vertex ", v, " has mass ", V.mass(v));
     if (V.n_tris[v] == 0) return fail("vertex ", v, " is in no triangle");
     const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
     for (int k = 0; k < V.n_springs[v]; ++k) {

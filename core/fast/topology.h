@@ -84,11 +84,11 @@ struct alignas(16) Float4 {
 };
 
 struct Vertices {
-  // hot, per step (float: the fast backend's precision)
-  Array<float> x, y, z;      ///< position x_k
-  Array<float> vx, vy, vz;   ///< velocity v_k
-  Array<float> m;            ///< mass m_k (0: dead)
-  Array<float> nx, ny, nz;   ///< vertex normal n_k (MODEL.md §1)
+  // hot, per step (float: the fast backend's precision), in 16-byte rows that every pass reads
+  // natively: a random neighbour costs one load per quantity, not one line per attribute.
+  Array<Float4> xm;          ///< position x_k in x, y, z; mass m_k in w (0: dead)
+  Array<Float4> vm;          ///< velocity v_k in x, y, z; m_k again in w (set_mass keeps both)
+  Array<Float4> nr;          ///< vertex normal n_k (MODEL.md §1) in x, y, z; w = 0
   // cold
   Array<float> rx, ry, rz;   ///< rest position X_k
   // adjacency (see the file comment): two pools of blocks, each with a parallel pool
@@ -107,7 +107,10 @@ struct Vertices {
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
   std::int64_t created = 0;       ///< vertices taken since the last relayout (layout_stale)
 
-  int size() const { return int(m.size()); }
+  int size() const { return int(xm.size()); }
+  float mass(int v) const { return xm[std::size_t(v)].w; }
+  /// The mass lives in both rows' w (a pass reads it from whichever row it loads).
+  void set_mass(int v, float m) { xm[std::size_t(v)].w = vm[std::size_t(v)].w = m; }
 };
 
 /// One edge slot's topology and rest state in one record (36 bytes): an event reads or writes

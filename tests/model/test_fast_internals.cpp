@@ -108,21 +108,20 @@ TEST(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
   c.kappa = float(p.kappa), c.bend = float(p.bend), c.damping = 0.5f, c.implicit = 1e-3f;
   const float unit = 1.0f;
   fast::triangle_areas(m, unit, m.T.area.data(), 0, m.T.size());
-  fast::vertex_normals(m, {m.V.nx.data(), m.V.ny.data(), m.V.nz.data()}, 0, m.V.size());
+  fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
   fast::StepScratch step;
   step.fit(m);
-  fast::pack_rows(m.V, step.rows, 0, m.V.size());
   const int n = m.E.size();
   fast::EdgeOut* out = step.edge_out.data();
-  fast::edge_forces(m.E, step.rows, c, out, 0, n);
+  fast::edge_forces(m.E, m.V, c, out, 0, n);
   const std::vector<fast::EdgeOut> whole(out, out + n);
   int hinges = 0;
   for (const fast::EdgeOut& r : whole) hinges += r.kb != 0;
   ASSERT_GT(hinges, n / 4);  // bending is exercised, not only springs
   for (int split = 1; split < 20; ++split) {
     for (auto& r : step.edge_out) r = fast::EdgeOut{-1, -1, -1, -1, -1, -1, -1, -1};
-    fast::edge_forces(m.E, step.rows, c, out, split, n);
-    fast::edge_forces(m.E, step.rows, c, out, 0, split);
+    fast::edge_forces(m.E, m.V, c, out, split, n);
+    fast::edge_forces(m.E, m.V, c, out, 0, split);
     EXPECT_EQ(std::memcmp(whole.data(), out, sizeof(fast::EdgeOut) * std::size_t(n)), 0) << "split at " << split;
   }
 }
