@@ -9,22 +9,23 @@ namespace crumple::bench {
 namespace {
 // Element sizes of the layout (topology.h). The asserts make a layout change fail here, where
 // the formulas below must then be revisited, rather than silently miscount.
-constexpr double kF = 4, kI = 4, kU8 = 1, kU16 = 2;  // float, int32 id, flag byte, list count
-constexpr double kF4 = 16, kOut = 32;                // Float4 (vertex rows, g, area), EdgeOut record
-constexpr double kEdge = 36;                         // EdgeRecord: the edge's topology and l0
-static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut && sizeof(fast::EdgeRecord) == kEdge);
+constexpr double kF = 4, kI = 4, kU8 = 1;   // float, int32 id, flag byte
+constexpr double kF4 = 16, kOut = 32;       // Float4 (vertex rows, g, area), EdgeOut record
+constexpr double kEdge = 36, kHead = 8;     // EdgeRecord (the edge's topology and l0), ListHead
+static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut && sizeof(fast::EdgeRecord) == kEdge &&
+              sizeof(fast::ListHead) == kHead);
 constexpr double kLine = 64;
 
-/// One vertex's list: its block start and its share of the pool.
-double list_row(double room) { return kI + kI * room; }
-double list_lines(double room) { return 1 + std::ceil(kI * room / kLine); }
+/// One vertex's list: its head (block start, count, room) and its share of the pool.
+double list_row(double room) { return kHead + kI * room; }
+double block_lines(double room) { return std::ceil(kI * room / kLine); }
 
 // triangle_areas: per triangle slot its corners v0..v2 and alive in, its area vector out; the
 // corners' position rows once per vertex.
-// vertex_normals: per vertex its triangle row and count, the normal row out; each area once.
+// vertex_normals: per vertex its triangle list, the normal row out; each area once.
 double normals(const LayoutSizes& s) {
   const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * kF4;
-  const double sums = s.vertices * (list_row(s.room_t) + kU16 + kF4) + s.triangles * kF4;
+  const double sums = s.vertices * (list_row(s.room_t) + kF4) + s.triangles * kF4;
   return areas + sums;
 }
 
@@ -32,20 +33,21 @@ double normals(const LayoutSizes& s) {
 // 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its three rows.
 double edge_forces(const LayoutSizes& s) { return s.edges * (kEdge + kOut) + s.vertices * 3 * kF4; }
 
-// Per vertex its spring, neighbour and wing rows and both counts, its velocity and normal rows
+// Per vertex its spring, neighbour and wing lists (the neighbours' block shares the springs'
+// head), its velocity and normal rows
 // in, f, ksum and g out; every EdgeOut record once, every neighbour's velocity row once (the
 // vertex's own among them).
 double gather(const LayoutSizes& s) {
-  const double lists = list_row(s.room_e) + kI * s.room_e + list_row(s.room_t) + 2 * kU16;
+  const double lists = list_row(s.room_e) + kI * s.room_e + list_row(s.room_t);
   const double per_vertex = lists + kF4 + kF4 + 4 * kF + kF4;
   return s.vertices * per_vertex + s.edges * kOut;
 }
 
-// Per sweep and vertex: its neighbour row and count, ksum, f and its velocity row in, each
+// Per sweep and vertex: its neighbour list, ksum, f and its velocity row in, each
 // neighbour's guess g once (the vertex's own g among them), g_next out. Then momentum_drift with
 // the total mass (velocity row, g, f in) and advance (position row and g in; both rows out).
 double integrate(const LayoutSizes& s, int sweeps) {
-  const double sweep = s.vertices * (list_row(s.room_e) + kU16 + kF + kF4 + 3 * kF + kF4 + kF4);
+  const double sweep = s.vertices * (list_row(s.room_e) + kF + kF4 + 3 * kF + kF4 + kF4);
   const double drift = s.vertices * (kF4 + kF4 + 3 * kF);
   const double advance = s.vertices * (kF4 + kF4 + 2 * kF4);
   return sweeps * sweep + drift + advance;
@@ -58,11 +60,11 @@ double adapt_test(const LayoutSizes& s) {
 }
 
 // Lines of one element's row, each array's entry on its own line (random access in SoA): a
-// vertex's three rows (position, velocity, normal), rest position (3 floats), its counts (2),
-// rooms (2), lid, phys, and its four adjacency lists (each: block start and block); an edge's record (at most two lines: 36
+// vertex's four rows (position, velocity, normal, rest position), lid, phys, its two list heads
+// and its four adjacency blocks; an edge's record (at most two lines: 36
 // bytes straddle a line boundary for half the slots), lid and phys; a triangle's 10 arrays. The
 // step's scratch (step_scratch.h) is no part of a row: no event reads or writes it.
-double vertex_lines(const LayoutSizes& s) { return 12 + 2 * list_lines(s.room_e) + 2 * list_lines(s.room_t); }
+double vertex_lines(const LayoutSizes& s) { return 4 + 2 + 2 + 2 * block_lines(s.room_e) + 2 * block_lines(s.room_t); }
 constexpr double kEdgeLines = 2 + 2, kTriangleLines = 10;
 constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
 
@@ -82,7 +84,7 @@ double topology_apply(const LayoutSizes& s, double events) {
 // relayout reads every array of every element and writes it permuted: twice the whole state
 // (not the step's scratch, which the next step rewrites: no EdgeOut).
 double layout(const LayoutSizes& s) {
-  const double vertex = 3 * kF4 + 3 * kF + 4 * kU16 + 2 * kI + 2 * list_row(s.room_e) + 2 * list_row(s.room_t);
+  const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t);
   const double edge = kEdge + 2 * kI;
   const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);

@@ -17,7 +17,7 @@ void ConstraintColors::update(const Topology& m) {
     const std::uint32_t stamp = std::uint32_t(id) + 1;
     for (const int v : {E[e].a, E[e].b}) {  // the colours of the springs at v coloured so far
       const std::int32_t* springs = m.springs_of(v);
-      for (int k = 0, n = m.V.n_springs[v]; k < n; ++k) {
+      for (int k = 0, n = m.V.spring_list[v].count; k < n; ++k) {
         const int c = color_[std::size_t(springs[k] >> 1)];
         if (c >= 0) taken_[std::size_t(c)] = stamp;
       }

@@ -29,8 +29,8 @@ inline void prefetch_vertex(const Topology& m, int v) {
   if (v < 0) return;
   const Vertices& V = m.V;
   prefetch(&V.xm[v]), prefetch(&V.vm[v]), prefetch(&V.nr[v]);
-  for (const Array<float>* a : {&V.rx, &V.ry, &V.rz}) prefetch(&(*a)[v]);
-  prefetch(&V.n_springs[v]), prefetch(&V.n_tris[v]);
+  prefetch(&V.rest[v]);
+  prefetch(&V.spring_list[v]), prefetch(&V.tri_list[v]);
   prefetch(m.springs_of(v)), prefetch(m.nbrs_of(v)), prefetch(m.tris_of(v)), prefetch(m.wings_of(v));
 }
 inline void prefetch_triangle(const Topology& m, int t) {

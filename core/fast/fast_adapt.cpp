@@ -140,7 +140,7 @@ void FastSimulator::renew_normals() {
   par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.n_tris[v]), prefetch_read(topo_.tris_of(v));
+        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.tri_list[v]), prefetch_read(topo_.tris_of(v));
       const int t = changed[k];
       if (!T.alive[t]) continue;
       for (int v : T.corners(t)) {

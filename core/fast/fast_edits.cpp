@@ -147,8 +147,12 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   const double s = std::abs(curl) <= 1e-6 * lt ? (flat_draw < 0.5f ? -1.0 : 1.0) : (curl > 0 ? 1.0 : -1.0);
 
   // [Eq 3] masses of N = {i, j, l, r}; [Eq 4] the new vertex's momentum.
-  const D3 Xn{0.5 * (double(V.rx[i]) + V.rx[j]), 0.5 * (double(V.ry[i]) + V.ry[j]), 0.5 * (double(V.rz[i]) + V.rz[j])};
-  auto rest_dist = [&](int k) { return norm({V.rx[k] - Xn.x, V.ry[k] - Xn.y, V.rz[k] - Xn.z}); };
+  const Float4 Xi = V.rest[i], Xj = V.rest[j];
+  const D3 Xn{0.5 * (double(Xi.x) + Xj.x), 0.5 * (double(Xi.y) + Xj.y), 0.5 * (double(Xi.z) + Xj.z)};
+  auto rest_dist = [&](int k) {
+    const Float4 Xk = V.rest[k];
+    return norm({Xk.x - Xn.x, Xk.y - Xn.y, Xk.z - Xn.z});
+  };
   SplitRecord rec;
   rec.k = {i, j, l, r};
   rec.l0 = l0;
@@ -171,7 +175,7 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
 
   const int n = plan.n;
   m.init_vertex(n);
-  V.rx[n] = float(Xn.x), V.ry[n] = float(Xn.y), V.rz[n] = float(Xn.z);
+  V.rest[n] = Float4{float(Xn.x), float(Xn.y), float(Xn.z), 0.0f};
   V.xm[n] = Float4{float(0.5 * (xi.x + xj.x) + s * theta * nu.x), float(0.5 * (xi.y + xj.y) + s * theta * nu.y),
                    float(0.5 * (xi.z + xj.z) + s * theta * nu.z), float(mn)};
   V.vm[n] = Float4{float(pn.x / mn), float(pn.y / mn), float(pn.z / mn), float(mn)};
@@ -200,7 +204,7 @@ bool FastSimulator::can_restore(int e) const {
     if (!((a == ends[q][0] && b == ends[q][1]) || (a == ends[q][1] && b == ends[q][0]))) return false;
     ++expected;
   }
-  if (m.V.n_springs[n] != expected) return false;  // n still has exactly its own edges
+  if (m.V.spring_list[n].count != expected) return false;  // n still has exactly its own edges
   if (l >= 0 && !(is_triangle(m.T, s.t[0], i, n, l) && is_triangle(m.T, s.t[1], n, j, l))) return false;
   if (r >= 0 && !(is_triangle(m.T, s.t[2], j, n, r) && is_triangle(m.T, s.t[3], n, i, r))) return false;
   return true;

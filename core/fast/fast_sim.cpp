@@ -32,9 +32,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   waves_.reserve(room * nv);
   for (int k = 0; k < nv; ++k) {
     const int v = topo_.new_vertex();
-    topo_.V.rx[v] = float(scene_.rest[k][0]);
-    topo_.V.ry[v] = float(scene_.rest[k][1]);
-    topo_.V.rz[v] = float(scene_.rest[k][2]);
+    topo_.V.rest[v] = Float4{float(scene_.rest[k][0]), float(scene_.rest[k][1]), float(scene_.rest[k][2]), 0.0f};
     topo_.V.xm[v] = Float4{float(scene_.position[k][0]), float(scene_.position[k][1]), float(scene_.position[k][2]), 0.0f};
     topo_.V.set_mass(v, float(scene_.mass[k]));
   }

@@ -89,7 +89,7 @@ double FastSimulator::stiffness_bound() const {
   for (int v = 0; v < V.size(); ++v) {
     if (!(V.mass(v) > 0)) continue;
     double row = 0;
-    for (int k = 0; k < V.n_springs[v]; ++k) {
+    for (int k = 0; k < V.spring_list[v].count; ++k) {
       const double mi = V.mass(v), mj = V.mass(topo_.nbrs_of(v)[k]);
       row += (mi + mj) * (1 / mi + 1 / std::sqrt(mi * mj));
     }
@@ -105,7 +105,7 @@ Snapshot FastSimulator::snapshot() const {
     const int v = V.phys[id];
     const bool alive = V.mass(v) > 0;
     s.vertex_alive.push_back(alive);
-    s.rest.push_back(alive ? Vec3d{V.rx[v], V.ry[v], V.rz[v]} : Vec3d{});
+    s.rest.push_back(alive ? Vec3d{V.rest[v].x, V.rest[v].y, V.rest[v].z} : Vec3d{});
     s.position.push_back(alive ? Vec3d{V.xm[v].x, V.xm[v].y, V.xm[v].z} : Vec3d{});
     s.velocity.push_back(alive ? Vec3d{V.vm[v].x, V.vm[v].y, V.vm[v].z} : Vec3d{});
     s.mass.push_back(alive ? V.mass(v) : 0.0);

@@ -74,15 +74,14 @@ void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, 
 }  // namespace
 
 void vertex_normals(const Topology& m, Float4* normals, int begin, int end) {
-  const std::int32_t* __restrict at = m.V.at_t.data();
+  const ListHead* __restrict heads = m.V.tri_list.data();
   const std::int32_t* __restrict tris = m.V.tris.data();
-  const std::uint16_t* __restrict count = m.V.n_tris.data();
   const Float4* __restrict area = m.T.area.data();
   Float4* __restrict n_out = normals;
   for (int v = begin; v < end; ++v) {
     Row4 sum = Row4::zero();
-    const std::int32_t* list = tris + at[v];
-    const int n = count[v];
+    const std::int32_t* list = tris + heads[v].at;
+    const int n = heads[v].count;
     for_list(list, n, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
     const float sx = sum[0], sy = sum[1], sz = sum[2];
     const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
@@ -213,8 +212,9 @@ void gather_forces(const Topology& m, const EdgeOut* records, const StepConstant
   for (int v = begin; v < end; ++v) {
     if (v + kAhead < end) {
       const int a = v + kAhead;
-      prefetch_list(out, &V.springs[V.at_e[a]], V.n_springs[a], 1);
-      prefetch_list(out, &V.wings[V.at_t[a]], V.n_tris[a], 0);
+      const ListHead sa = V.spring_list[a], ta = V.tri_list[a];
+      prefetch_list(out, &V.springs[sa.at], sa.count, 1);
+      prefetch_list(out, &V.wings[ta.at], ta.count, 0);
     }
     // Per spring, its record and the implicit block W_e = w (m_v + m_o) I [Eq 5, D17] with
     // W_e (v_o - v) from the rows of v and of the neighbour o (nothing per edge to store for
@@ -224,9 +224,10 @@ void gather_forces(const Topology& m, const EdgeOut* records, const StepConstant
     Row sum = Row::zero();
     Row4 j = Row4::zero();
     float ks = 0;
-    const std::int32_t* springs = &V.springs[V.at_e[v]];
-    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
-    const int ns = V.n_springs[v], nt = V.n_tris[v];
+    const ListHead sl = V.spring_list[v], tl = V.tri_list[v];
+    const std::int32_t* springs = &V.springs[sl.at];
+    const std::int32_t* nbrs = &V.nbrs[sl.at];
+    const int ns = sl.count, nt = tl.count;
     auto spring = [&](int k, bool in) {
       const int x = springs[k];
       sum += Row::load(in ? &out[x >> 1] : &kZeroRow) * kAsEndpoint[x & 1];
@@ -237,7 +238,7 @@ void gather_forces(const Topology& m, const EdgeOut* records, const StepConstant
     };
     for (int k = 0; k < kFixed; ++k) spring(k, k < ns);
     for (int k = kFixed; k < ns; ++k) spring(k, true);
-    const std::int32_t* wings = &V.wings[V.at_t[v]];  // v is a wing of the edge opposite it
+    const std::int32_t* wings = &V.wings[tl.at];  // v is a wing of the edge opposite it
     for_list(wings, nt, [&](int x, bool in) { sum += Row::load(in ? &out[x] : &kZeroRow) * kAsWing; });
     float fx = sum[0], fy = sum[1], fz = sum[2];
     const float kn = sum[3], mx = sum[4], my = sum[5], mz = sum[6];  // f = -k n_v (hinge), +k n_v (wing), - mean
@@ -271,8 +272,9 @@ void jacobi_sweep(const Topology& m, const VertexForces& f, const StepConstants&
     Row4 sum = Row4::zero();
     const Float4 vel = V.vm[v];
     const float mass = vel.w;
-    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
-    const int n = V.n_springs[v];
+    const ListHead sl = V.spring_list[v];
+    const std::int32_t* nbrs = &V.nbrs[sl.at];
+    const int n = sl.count;
     auto add = [&](const Float4* p) {
       const Row4 o = Row4::load(p);
       sum += (c.implicit * (mass + o[3])) * o;  // W_e (the neighbour's mass in w) times its guess

@@ -60,10 +60,10 @@ void axial_blocks(const Topology& m, const VertexForces& f, const StepConstants&
   for (int v = begin; v < end; ++v) {
     const Float4 self = V.xm[v], vel = V.vm[v];
     const float mass = self.w;
-    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
+    const std::int32_t* nbrs = &V.nbrs[V.spring_list[v].at];
     Block3 S;
     Vec j;  // sum of W_e (v_o - v_v)
-    for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
+    for (int k = 0, n = V.spring_list[v].count; k < n; ++k) {
       const int o = nbrs[k];
       const SpringBlock W = spring_block(self, V.xm[o], c);
       add_block(W, S);
@@ -89,9 +89,9 @@ void axial_sweep(const Topology& m, const VertexForces& f, const Block3* wsum, c
   for (int v = begin; v < end; ++v) {
     const Float4 self = V.xm[v], vel = V.vm[v];
     const float mass = self.w;
-    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
+    const std::int32_t* nbrs = &V.nbrs[V.spring_list[v].at];
     Vec sum;  // sum of W_e g_o
-    for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
+    for (int k = 0, n = V.spring_list[v].count; k < n; ++k) {
       const int o = nbrs[k];
       add_times(spring_block(self, V.xm[o], c), g[o].x, g[o].y, g[o].z, sum);
     }

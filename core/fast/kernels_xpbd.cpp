@@ -13,9 +13,9 @@ void viscous_guess(const Topology& m, const StepConstants& c, Float4* g, int beg
   const Vertices& V = m.V;
   for (int v = begin; v < end; ++v) {
     const Float4 self = V.vm[v];
-    const std::int32_t* nbrs = &V.nbrs[V.at_e[v]];
+    const std::int32_t* nbrs = &V.nbrs[V.spring_list[v].at];
     float ks = 0, jx = 0, jy = 0, jz = 0;  // sum W_e and sum W_e (v_o - v), W_e = h c_e I
-    for (int k = 0, n = V.n_springs[v]; k < n; ++k) {
+    for (int k = 0, n = V.spring_list[v].count; k < n; ++k) {
       const Float4 o = V.vm[nbrs[k]];
       const float w = c.implicit * (self.w + o.w);
       ks += w;

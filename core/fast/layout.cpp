@@ -96,10 +96,9 @@ void inverse(const Parallel& par, const From& order, To& of) {
 
 /// The spare buffer of element type T.
 template <class T> Array<T>& spare(LayoutScratch& s);
-template <> Array<float>& spare(LayoutScratch& s) { return s.spare_f; }
+template <> Array<ListHead>& spare(LayoutScratch& s) { return s.spare_heads; }
 template <> Array<std::int32_t>& spare(LayoutScratch& s) { return s.spare_i; }
 template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
-template <> Array<std::uint16_t>& spare(LayoutScratch& s) { return s.spare_u16; }
 template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
 template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
 
@@ -129,23 +128,21 @@ void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vect
 }
 
 /// Repacks one adjacency pool (list) and its parallel pool in the new vertex order: the vertex
-/// now in slot k gets a block of room_for(count[k]) entries (count already permuted), the blocks
+/// now in slot k (heads already permuted) gets a block of room_for(count) entries, the blocks
 /// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
 /// left. f and g rename the entries of list and parallel.
 template <class F, class G>
 void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Array<std::int32_t>& parallel,
-            Array<std::int32_t>& at, Array<std::uint16_t>& room, const Array<std::uint16_t>& count,
-            const std::vector<int>& order, F f, G g) {
-  const int n = int(order.size());
+            Array<ListHead>& heads, F f, G g) {
+  const int n = int(heads.size());
   s.at_old.resize(n);
-  par.run(n, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) s.at_old[k] = at[order[k]];
-  });
   std::int64_t total = 0;  // a serial prefix sum: a few ns per vertex, and relayout is rare
   for (int k = 0; k < n; ++k) {
-    room[k] = std::uint16_t(room_for(count[k]));
-    at[k] = std::int32_t(total);
-    total += room[k];
+    ListHead& h = heads[k];
+    s.at_old[k] = h.at;
+    h.room = std::uint16_t(room_for(h.count));
+    h.at = std::int32_t(total);
+    total += h.room;
   }
   auto copy = [&](Array<std::int32_t>& pool, auto rename) {
     Array<std::int32_t>& out = spare<std::int32_t>(s);
@@ -156,7 +153,7 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
     par.run(n, kGrain, [&](int b, int e) {
       for (int k = b; k < e; ++k) {
         if (k + kAhead < e) __builtin_prefetch(&src[s.at_old[k + kAhead]]);
-        for (int w = 0; w < count[k]; ++w) dst[at[k] + w] = rename(src[s.at_old[k] + w]);
+        for (int w = 0; w < heads[k].count; ++w) dst[heads[k].at + w] = rename(src[s.at_old[k] + w]);
       }
     });
     pool.swap(out);
@@ -171,7 +168,8 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int v = 0; v < n; ++v) {
     if (!(V.mass(v) > 0)) continue;
-    const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
+    const Float4 X = V.rest[v];
+    const float r[3] = {X.x, X.y, X.z};
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], r[d]), hi[d] = std::max(hi[d], r[d]);
   }
   // Resolution: a sheet of n vertices has about sqrt(n) per axis; four times that per axis.
@@ -185,7 +183,8 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
         s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
         continue;
       }
-      const float r[3] = {V.rx[v], V.ry[v], V.rz[v]};
+      const Float4 X = V.rest[v];
+      const float r[3] = {X.x, X.y, X.z};
       std::uint64_t code = 0;
       for (int d = 0; d < 3; ++d) {
         const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double((1 << bits) - 1));
@@ -215,10 +214,9 @@ LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   if (this == &o) return *this;
   vorder = o.vorder, vnew = o.vnew, eorder = o.eorder, enew = o.enew, torder = o.torder, tnew = o.tnew;
   key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2, at_old = o.at_old;
-  copy_warm(spare_f, o.spare_f);
+  copy_warm(spare_heads, o.spare_heads);
   copy_warm(spare_i, o.spare_i);
   copy_warm(spare_u8, o.spare_u8);
-  copy_warm(spare_u16, o.spare_u16);
   copy_warm(spare_f4, o.spare_f4);
   copy_warm(spare_edges, o.spare_edges);
   return *this;
@@ -259,15 +257,12 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
   // next step before anything reads them), then the adjacency lists with their entries renamed.
-  for (Array<Float4>* a : {&V.xm, &V.vm, &V.nr}) permute(par, s, *a, vorder);
-  for (Array<float>* a : {&V.rx, &V.ry, &V.rz}) permute(par, s, *a, vorder);
-  permute(par, s, V.n_springs, vorder);
-  permute(par, s, V.n_tris, vorder);
+  for (Array<Float4>* a : {&V.xm, &V.vm, &V.nr, &V.rest}) permute(par, s, *a, vorder);
+  for (Array<ListHead>* a : {&V.spring_list, &V.tri_list}) permute(par, s, *a, vorder);
   permute(par, s, V.lid, vorder);
-  repack(par, s, V.springs, V.nbrs, V.at_e, V.room_e, V.n_springs, vorder,
-         [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); }, vmap);
-  repack(par, s, V.tris, V.wings, V.at_t, V.room_t, V.n_tris, vorder,
-         [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, emap);
+  repack(par, s, V.springs, V.nbrs, V.spring_list, [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); },
+         vmap);
+  repack(par, s, V.tris, V.wings, V.tri_list, [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, emap);
   V.garbage_e = V.garbage_t = 0;
 
   // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to

@@ -36,10 +36,9 @@ struct LayoutScratch {
   std::vector<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
   std::vector<std::int32_t> at_old;  ///< each vertex's old block start, by new slot (repacking)
   std::vector<std::uint64_t> code, code2;
-  Array<float> spare_f;
+  Array<ListHead> spare_heads;
   Array<std::int32_t> spare_i;
   Array<std::uint8_t> spare_u8;
-  Array<std::uint16_t> spare_u16;
   Array<Float4> spare_f4;
   Array<EdgeRecord> spare_edges;
 };

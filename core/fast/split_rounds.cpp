@@ -79,7 +79,7 @@ void SplitRounds::make_room(FastSimulator& sim) {
       if (v >= 0) ++tri_adds_[v];
   }
   for (int v : involved_) {
-    m.make_room(v, m.V.n_springs[v] + spring_adds_[v], m.V.n_tris[v] + tri_adds_[v]);
+    m.make_room(v, m.V.spring_list[v].count + spring_adds_[v], m.V.tri_list[v].count + tri_adds_[v]);
     round_last_[v] = spring_adds_[v] = tri_adds_[v] = 0;
   }
 }

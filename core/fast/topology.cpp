@@ -35,7 +35,7 @@ void reserve_all(std::size_t n, A&... arrays) {
 }  // namespace
 
 void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
-  reserve_all(nv, V.xm, V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris, V.lid, V.phys);
+  reserve_all(nv, V.xm, V.vm, V.nr, V.rest, V.spring_list, V.tri_list, V.lid, V.phys);
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.slots, E.lid, E.phys);
@@ -71,7 +71,7 @@ int Topology::new_vertex() {
 }
 
 // A vertex slot keeps its blocks when it is released and reused: only new slots get blocks (fit).
-void Topology::init_vertex(int v) { V.n_springs[v] = V.n_tris[v] = 0; }
+void Topology::init_vertex(int v) { V.spring_list[v].count = V.tri_list[v].count = 0; }
 
 int Topology::take_vertex() {
   ++V.created;
@@ -93,14 +93,14 @@ std::int32_t append_block(Array<std::int32_t>& list, Array<std::int32_t>& parall
 
 void Topology::fit() {
   if (const std::size_t n = V.lid.size(), old = V.xm.size(); n != old) {
-    grow(n, V.xm, V.vm, V.nr, V.rx, V.ry, V.rz, V.at_e, V.at_t, V.room_e, V.room_t, V.n_springs, V.n_tris);
+    grow(n, V.xm, V.vm, V.nr, V.rest, V.spring_list, V.tri_list);
     // One block of the least room per new slot, in slot order.
     const std::int32_t at_e = append_block(V.springs, V.nbrs, (n - old) * kMinRoom);
     const std::int32_t at_t = append_block(V.tris, V.wings, (n - old) * kMinRoom);
     for (std::size_t v = old; v < n; ++v) {
-      V.at_e[v] = at_e + std::int32_t((v - old) * kMinRoom);
-      V.at_t[v] = at_t + std::int32_t((v - old) * kMinRoom);
-      V.room_e[v] = V.room_t[v] = kMinRoom;
+      const std::int32_t offset = std::int32_t((v - old) * kMinRoom);
+      V.spring_list[v] = ListHead{at_e + offset, 0, kMinRoom};
+      V.tri_list[v] = ListHead{at_t + offset, 0, kMinRoom};
     }
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
@@ -111,8 +111,8 @@ void Topology::fit() {
 
 void Topology::release_vertex(int v) {
   V.xm[v] = V.vm[v] = V.nr[v] = Float4{};
-  V.rx[v] = V.ry[v] = V.rz[v] = 0;
-  V.n_springs[v] = V.n_tris[v] = 0;
+  V.rest[v] = Float4{};
+  V.spring_list[v].count = V.tri_list[v].count = 0;
 }
 
 int Topology::new_edge(int a, int b, float l0) {
@@ -183,8 +183,8 @@ int Topology::take_record() {
 }
 
 void Topology::make_room(int v, int springs, int tris) {
-  if (springs > V.room_e[v]) move_block(v, true, springs);
-  if (tris > V.room_t[v]) move_block(v, false, tris);
+  if (springs > V.spring_list[v].room) move_block(v, true, springs);
+  if (tris > V.tri_list[v].room) move_block(v, false, tris);
 }
 
 void Topology::move_block(int v, bool springs, int need) {
@@ -192,9 +192,10 @@ void Topology::move_block(int v, bool springs, int need) {
     throw std::length_error("a vertex has more than " + std::to_string(kMaxRoom) + (springs ? " springs" : " triangles"));
   Array<std::int32_t>& list = springs ? V.springs : V.tris;
   Array<std::int32_t>& parallel = springs ? V.nbrs : V.wings;
-  std::int32_t& at = springs ? V.at_e[v] : V.at_t[v];
-  std::uint16_t& room = springs ? V.room_e[v] : V.room_t[v];
-  const int count = springs ? V.n_springs[v] : V.n_tris[v];
+  ListHead& head = springs ? V.spring_list[v] : V.tri_list[v];
+  std::int32_t& at = head.at;
+  std::uint16_t& room = head.room;
+  const int count = head.count;
   // Doubling: a list that grows one entry at a time moves O(log valence) times.
   const int wider = std::min(kMaxRoom, std::max(room_for(need), 2 * int(room)));
   const std::int32_t to = append_block(list, parallel, std::size_t(wider));
@@ -207,7 +208,7 @@ void Topology::move_block(int v, bool springs, int need) {
 
 int Topology::mesh_edge(int a, int b) const {
   const std::int32_t *s = springs_of(a), *nb = nbrs_of(a);
-  for (int k = 0; k < V.n_springs[a]; ++k)
+  for (int k = 0; k < V.spring_list[a].count; ++k)
     if (nb[k] == b && (E[s[k] >> 1].flags & kMesh)) return s[k] >> 1;
   return -1;
 }
@@ -251,24 +252,26 @@ void Topology::detach(int t) {
 // Appends move a full list first, which only serial code may do: parallel edits reserve room
 // beforehand (make_room), so that an append never moves a block while another thread reads.
 void Topology::list_spring(int v, int entry, int other) {
-  if (V.n_springs[v] == V.room_e[v]) move_block(v, true, V.n_springs[v] + 1);
-  const std::size_t slot = std::size_t(V.at_e[v]) + V.n_springs[v]++;
+  if (V.spring_list[v].count == V.spring_list[v].room) move_block(v, true, V.spring_list[v].count + 1);
+  ListHead& head = V.spring_list[v];
+  const std::size_t slot = std::size_t(head.at) + head.count++;
   V.springs[slot] = entry;
   V.nbrs[slot] = other;
 }
 void Topology::unlist_spring(int v, int entry) {
-  const std::size_t base = std::size_t(V.at_e[v]);
-  erase_slot(&V.springs[base], &V.nbrs[base], V.n_springs[v], entry);
+  const std::size_t base = std::size_t(V.spring_list[v].at);
+  erase_slot(&V.springs[base], &V.nbrs[base], V.spring_list[v].count, entry);
 }
 void Topology::list_tri(int v, int entry, int wing_edge) {
-  if (V.n_tris[v] == V.room_t[v]) move_block(v, false, V.n_tris[v] + 1);
-  const std::size_t slot = std::size_t(V.at_t[v]) + V.n_tris[v]++;
+  if (V.tri_list[v].count == V.tri_list[v].room) move_block(v, false, V.tri_list[v].count + 1);
+  ListHead& head = V.tri_list[v];
+  const std::size_t slot = std::size_t(head.at) + head.count++;
   V.tris[slot] = entry;
   V.wings[slot] = wing_edge;
 }
 void Topology::unlist_tri(int v, int entry) {
-  const std::size_t base = std::size_t(V.at_t[v]);
-  erase_slot(&V.tris[base], &V.wings[base], V.n_tris[v], entry);
+  const std::size_t base = std::size_t(V.tri_list[v].at);
+  erase_slot(&V.tris[base], &V.wings[base], V.tri_list[v].count, entry);
 }
 
 int Topology::live_vertices() const {
@@ -286,22 +289,20 @@ std::string Topology::check_blocks() const {
   const char* names[2] = {"springs", "tris"};
   for (int which = 0; which < 2; ++which) {
     const bool springs = which == 0;
-    const Array<std::int32_t>& at = springs ? V.at_e : V.at_t;
-    const Array<std::uint16_t>& room = springs ? V.room_e : V.room_t;
-    const Array<std::uint16_t>& count = springs ? V.n_springs : V.n_tris;
+    const Array<ListHead>& heads = springs ? V.spring_list : V.tri_list;
     const std::size_t pool = springs ? V.springs.size() : V.tris.size();
     const std::size_t parallel = springs ? V.nbrs.size() : V.wings.size();
     const std::string name = names[which];
     if (parallel != pool) return "the " + name + " pool and its parallel pool differ in size";
-    if (at.size() != std::size_t(V.size()) || room.size() != at.size() || count.size() != at.size())
-      return "the " + name + " blocks are not one per vertex slot";
+    if (heads.size() != std::size_t(V.size())) return "the " + name + " blocks are not one per vertex slot";
     std::vector<std::pair<std::int64_t, int>> blocks;
     std::int64_t total = springs ? V.garbage_e : V.garbage_t;
     for (int v = 0; v < V.size(); ++v) {
-      if (room[v] < kMinRoom || count[v] > room[v] || at[v] < 0 || std::size_t(at[v]) + room[v] > pool)
+      const ListHead h = heads[v];
+      if (h.room < kMinRoom || h.count > h.room || h.at < 0 || std::size_t(h.at) + h.room > pool)
         return "vertex " + std::to_string(v) + "'s " + name + " block is out of bounds or too small";
-      blocks.emplace_back(at[v], room[v]);
-      total += room[v];
+      blocks.emplace_back(h.at, h.room);
+      total += h.room;
     }
     if (std::size_t(total) != pool)
       return "the " + name + " pool holds " + std::to_string(pool) + " entries, its blocks and garbage " +
@@ -349,7 +350,7 @@ std::string Topology::check() const {
       bool listed = false;
       const std::int32_t *s = tris_of(p), *w = wings_of(p);
       const int opposite = es[(k + 1) % 3];
-      for (int j = 0; j < V.n_tris[p]; ++j) listed |= s[j] == ((t << 2) | k) && w[j] == opposite;
+      for (int j = 0; j < V.tri_list[p].count; ++j) listed |= s[j] == ((t << 2) | k) && w[j] == opposite;
       if (!listed) return fail("triangle ", t, " is not listed at vertex ", p);
     }
   }
@@ -366,7 +367,7 @@ std::string Topology::check() const {
     for (int end : {a, b}) {
       const std::int32_t* s = springs_of(end);
       const int want = (e << 1) | (end == b);
-      if (std::count(s, s + V.n_springs[end], want) != 1) return fail("edge ", e, " is not listed once at ", end);
+      if (std::count(s, s + V.spring_list[end].count, want) != 1) return fail("edge ", e, " is not listed once at ", end);
     }
     if (!(f & kMesh)) {
       if ((f & kBreakable) || E[e].tri0 >= 0 || E[e].tri1 >= 0 || E[e].record < 0)
@@ -382,9 +383,9 @@ std::string Topology::check() const {
     if (!(V.vm[v].w == V.xm[v].w)) return fail("vertex ", v, " has two masses ", V.xm[v].w, " and ", V.vm[v].w);
     if (vertex_dead[v]) continue;
     if (!(V.mass(v) > 0) || !std::isfinite(V.mass(v))) return fail("vertex ", v, " has mass ", V.mass(v));
-    if (V.n_tris[v] == 0) return fail("vertex ", v, " is in no triangle");
+    if (V.tri_list[v].count == 0) return fail("vertex ", v, " is in no triangle");
     const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
-    for (int k = 0; k < V.n_springs[v]; ++k) {
+    for (int k = 0; k < V.spring_list[v].count; ++k) {
       const int e = s[k] >> 1;
       if (!(E[e].flags & kAlive) || (s[k] & 1 ? E[e].b : E[e].a) != v || (s[k] & 1 ? E[e].a : E[e].b) != nb[k])
         return fail("vertex ", v, " lists a bad spring");

@@ -78,6 +78,14 @@ struct Face {
   std::array<int, 3> e{-1, -1, -1};
 };
 
+/// Where one vertex's list lives in its pool (see the file comment): 8 bytes, so that a pass
+/// reads a list's head with one load and an event edits it in one line.
+struct ListHead {
+  std::int32_t at = 0;      ///< start of the vertex's block in the pool
+  std::uint16_t count = 0;  ///< entries used
+  std::uint16_t room = 0;   ///< entries of the block (>= kMinRoom)
+};
+
 /// A 3-vector padded to 16 bytes: state that the kernels gather at random (one load, one line).
 struct alignas(16) Float4 {
   float x = 0, y = 0, z = 0, w = 0;
@@ -90,16 +98,14 @@ struct Vertices {
   Array<Float4> vm;          ///< velocity v_k in x, y, z; m_k again in w (set_mass keeps both)
   Array<Float4> nr;          ///< vertex normal n_k (MODEL.md §1) in x, y, z; w = 0
   // cold
-  Array<float> rx, ry, rz;   ///< rest position X_k
+  Array<Float4> rest;        ///< rest position X_k in x, y, z; w = 0
   // adjacency (see the file comment): two pools of blocks, each with a parallel pool
   Array<std::int32_t> springs;    ///< pool of spring lists: (edge << 1 | vertex is b)
   Array<std::int32_t> nbrs;       ///< parallel to springs: the other endpoint
   Array<std::int32_t> tris;       ///< pool of triangle lists: (triangle << 2 | corner)
   Array<std::int32_t> wings;      ///< parallel to tris: the edge opposite the vertex
-  Array<std::int32_t> at_e, at_t; ///< start of each vertex's block in springs / tris
-  Array<std::uint16_t> room_e, room_t;  ///< entries of each vertex's block (>= kMinRoom)
-  Array<std::uint16_t> n_springs; ///< entries used in the springs block
-  Array<std::uint16_t> n_tris;    ///< entries used in the tris block
+  Array<ListHead> spring_list;    ///< each vertex's block in springs (and nbrs)
+  Array<ListHead> tri_list;       ///< each vertex's block in tris (and wings)
   Array<std::int32_t> lid;        ///< logical id of each slot
   Array<std::int32_t> phys;       ///< slot of each logical id (the inverse of lid)
   std::int64_t garbage_e = 0;     ///< springs pool entries in blocks a list moved out of
@@ -210,10 +216,10 @@ class Topology {
   std::string check() const;  ///< empty if consistent
 
   // Adjacency access.
-  const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(V.at_e[v])]; }
-  const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(V.at_t[v])]; }
-  const std::int32_t* nbrs_of(int v) const { return &V.nbrs[std::size_t(V.at_e[v])]; }
-  const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(V.at_t[v])]; }
+  const std::int32_t* springs_of(int v) const { return &V.springs[std::size_t(V.spring_list[v].at)]; }
+  const std::int32_t* tris_of(int v) const { return &V.tris[std::size_t(V.tri_list[v].at)]; }
+  const std::int32_t* nbrs_of(int v) const { return &V.nbrs[std::size_t(V.spring_list[v].at)]; }
+  const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(V.tri_list[v].at)]; }
 
  private:
   void list_spring(int v, int entry, int other);

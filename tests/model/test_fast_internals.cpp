@@ -311,7 +311,7 @@ TEST(FastTopology, AdjacencyMemoryFollowsEachVertexsValence) {
   sim.run_pass(fast::Pass::Layout);
   ASSERT_EQ(sim.check_topology(), "");
   std::size_t want_e = 0, want_t = 0;
-  for (int v = 0; v < V.size(); ++v) want_e += fast::room_for(V.n_springs[v]), want_t += fast::room_for(V.n_tris[v]);
+  for (int v = 0; v < V.size(); ++v) want_e += fast::room_for(V.spring_list[v].count), want_t += fast::room_for(V.tri_list[v].count);
   EXPECT_EQ(V.springs.size(), want_e);
   EXPECT_EQ(V.tris.size(), want_t);
   EXPECT_EQ(V.garbage_e + V.garbage_t, 0);
@@ -324,10 +324,10 @@ TEST(FastTopology, CheckFindsOverlappingAndOverfullBlocks) {
   const fast::FastSimulator sim(make_grid(6), Params{}, 1);
   ASSERT_EQ(sim.topology().check(), "");
   fast::Topology overlap = sim.topology();
-  overlap.V.at_e[1] = overlap.V.at_e[0] + 1;
+  overlap.V.spring_list[1].at = overlap.V.spring_list[0].at + 1;
   EXPECT_NE(overlap.check().find("overlap"), std::string::npos) << overlap.check();
   fast::Topology overfull = sim.topology();
-  overfull.V.n_tris[3] = std::uint16_t(overfull.V.room_t[3] + 1);
+  overfull.V.tri_list[3].count = std::uint16_t(overfull.V.tri_list[3].room + 1);
   EXPECT_NE(overfull.check().find("block"), std::string::npos) << overfull.check();
 }
 
