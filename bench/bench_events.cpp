@@ -21,10 +21,12 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "bench_common.h"
+#include "bytes_moved.h"
 #include "prepared.h"
 
 namespace crumple::bench {
@@ -93,6 +95,10 @@ void BM_Events(benchmark::State& state, const std::string& backend, int threads,
   state.counters["splits"] = batch.splits;
   state.counters["restores"] = batch.restores;
   state.counters["us_per_event"] = state.iterations() ? 1e6 * applied / (events * double(state.iterations())) : 0.0;
+  // The modelled bytes of one event's lines (bench/bytes_moved.cpp), where the backend's layout
+  // is modelled: the report sets them against the machine's random-line rate (BM_Stream/gather).
+  if (const std::optional<LayoutSizes> sizes = layout_sizes(*p.sim))
+    state.counters["event_bytes"] = pass_bytes("topology_apply", *sizes, 1, 1) - pass_bytes("topology_apply", *sizes, 1, 0);
 }
 
 void register_event_benchmarks() {

@@ -4,6 +4,11 @@
 //   read   s += a[i]            8 bytes per element
 //   copy   c[i] = a[i]          16 bytes (STREAM's count: the write-allocate read is not counted)
 //   triad  a[i] = b[i] + q c[i] 24 bytes (idem)
+//   gather s += a[8 p[i]]       64 bytes: one double from each 64-byte line of a, the lines in a
+//                               fixed random order p (independent loads, as a pass's or an event's
+//                               scattered reads of rows; the index stream is not counted)
+// The gather is no streaming kernel: it is the rate at which the machine serves lines at random,
+// the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
 // Each array is 128 MiB, four times the largest L3 this runs on (32 MiB per Zen CCD), so every
 // pass comes from memory. Threads as in the other benchmarks: tbb::global_control caps the
 // parallelism at T; the range is cut into T equal static chunks (static_partitioner), the same
@@ -17,6 +22,8 @@
 #include <algorithm>
 #include <cstring>
 #include <memory>
+#include <numeric>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -33,33 +40,56 @@ typedef double Lanes __attribute__((vector_size(64)));
 constexpr std::size_t kLaneCount = sizeof(Lanes) / sizeof(double), kAccumulators = 4;
 constexpr std::size_t kStep = kLaneCount * kAccumulators;
 
-enum class Kernel { Read, Copy, Triad };
-constexpr double bytes_per_element(Kernel k) { return k == Kernel::Read ? 8 : k == Kernel::Copy ? 16 : 24; }
+enum class Kernel { Read, Copy, Triad, Gather };
+constexpr std::size_t kLineDoubles = 64 / sizeof(double), kLines = kElements / kLineDoubles;
+/// Bytes a pass moves, as STREAM counts them (the gather: every line it reads, whole).
+constexpr double pass_bytes(Kernel k) {
+  return k == Kernel::Gather ? 64.0 * double(kLines)
+                             : double(kElements) * (k == Kernel::Read ? 8 : k == Kernel::Copy ? 16 : 24);
+}
 
 struct Arrays {
   std::unique_ptr<double[]> a, b, c;
+  std::vector<std::uint32_t> lines;  ///< the gather's line order: a random permutation
 };
 
-/// Runs f(t, begin, end) over [0, kElements) in `threads` equal chunks t, one per thread.
+/// Runs f(t, begin, end) over [0, n) in `threads` equal chunks t, one per thread.
 template <class F>
-void for_chunks(int threads, F f) {
-  const std::size_t chunk = (kElements + std::size_t(threads) - 1) / std::size_t(threads);
+void for_chunks(int threads, F f, std::size_t n = kElements) {
+  const std::size_t chunk = (n + std::size_t(threads) - 1) / std::size_t(threads);
   tbb::parallel_for(
       0, threads,
       [&](int t) {
         const std::size_t begin = std::size_t(t) * chunk;
-        f(t, begin, std::min(kElements, begin + chunk));
+        f(t, begin, std::min(n, begin + chunk));
       },
       tbb::static_partitioner());
 }
 
-Arrays make_arrays(int threads) {
+Arrays make_arrays(int threads, Kernel kernel) {
   Arrays m{std::unique_ptr<double[]>(new double[kElements]), std::unique_ptr<double[]>(new double[kElements]),
-           std::unique_ptr<double[]>(new double[kElements])};
+           std::unique_ptr<double[]>(new double[kElements]), {}};
   for_chunks(threads, [&](int, std::size_t b, std::size_t e) {  // first touch by the thread that streams it
     for (std::size_t i = b; i < e; ++i) m.a[i] = 1.0, m.b[i] = 2.0, m.c[i] = 0.5;
   });
+  if (kernel == Kernel::Gather) {
+    m.lines.resize(kLines);
+    std::iota(m.lines.begin(), m.lines.end(), 0u);
+    std::shuffle(m.lines.begin(), m.lines.end(), std::mt19937_64(1));  // fixed: every run reads one order
+  }
   return m;
+}
+
+/// s += a[8 p[i]] over the chunk, in independent sums (the loads overlap as far as the core's
+/// outstanding misses allow: that limit is what the kernel measures).
+double gather_lines(const double* __restrict a, const std::uint32_t* __restrict lines, std::size_t begin,
+                    std::size_t end) {
+  double s[4] = {0, 0, 0, 0};
+  std::size_t i = begin;
+  for (; i + 4 <= end; i += 4)
+    for (std::size_t l = 0; l < 4; ++l) s[l] += a[std::size_t(lines[i + l]) * kLineDoubles];
+  for (; i < end; ++i) s[0] += a[std::size_t(lines[i]) * kLineDoubles];
+  return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
 /// One pass of the kernel; returns a value that depends on every element read (read kernel).
@@ -68,6 +98,12 @@ double run(Kernel k, Arrays& m, int threads) {
   double* __restrict b = m.b.get();
   double* __restrict c = m.c.get();
   std::vector<double> partial(std::size_t(threads), 0.0);
+  if (k == Kernel::Gather) {
+    for_chunks(
+        threads, [&](int t, std::size_t b, std::size_t e) { partial[std::size_t(t)] = gather_lines(a, m.lines.data(), b, e); },
+        kLines);
+    return std::accumulate(partial.begin(), partial.end(), 0.0);
+  }
   for_chunks(threads, [&](int t, std::size_t begin, std::size_t end) {
     if (k == Kernel::Read) {
       // Wide independent sums: a scalar sum is a chain of dependent adds, bound by the add's
@@ -99,7 +135,7 @@ double run(Kernel k, Arrays& m, int threads) {
 
 void BM_Stream(benchmark::State& state, Kernel kernel, int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  Arrays m = make_arrays(threads);
+  Arrays m = make_arrays(threads, kernel);
   run(kernel, m, threads);  // untimed warm-up pass
   for (auto _ : state) {
     const Clock::time_point t0 = Clock::now();
@@ -107,13 +143,14 @@ void BM_Stream(benchmark::State& state, Kernel kernel, int threads) {
     benchmark::ClobberMemory();
     state.SetIterationTime(seconds_between(t0, Clock::now()));
   }
-  state.counters["bytes_per_second"] = benchmark::Counter(
-      bytes_per_element(kernel) * double(kElements) * double(state.iterations()), benchmark::Counter::kIsRate);
-  state.counters["bytes"] = bytes_per_element(kernel) * double(kElements);
+  state.counters["bytes_per_second"] =
+      benchmark::Counter(pass_bytes(kernel) * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["bytes"] = pass_bytes(kernel);
 }
 
 void register_stream_benchmarks() {
-  const std::pair<const char*, Kernel> kernels[] = {{"read", Kernel::Read}, {"copy", Kernel::Copy}, {"triad", Kernel::Triad}};
+  const std::pair<const char*, Kernel> kernels[] = {
+      {"read", Kernel::Read}, {"copy", Kernel::Copy}, {"triad", Kernel::Triad}, {"gather", Kernel::Gather}};
   for (const auto& [label, kernel] : kernels)
     for (int threads : {1, 2}) {
       const std::string name = std::string("BM_Stream/") + label + "/" + std::to_string(threads) + "/" +

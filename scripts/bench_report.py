@@ -272,10 +272,19 @@ def stream_bandwidth(benches):
     return out
 
 
+# BM_Stream's kernel that reads whole lines at random: the rate of scattered misses, no STREAM kernel.
+GATHER = "gather"
+
+
 def roof(stream, threads):
-    """The bandwidth a pass on `threads` threads is set against: the best STREAM kernel there."""
-    kernels = stream.get(threads, {})
-    return max(kernels.values()) if kernels else float("nan")
+    """The bandwidth a pass on `threads` threads is set against: the best streaming kernel there."""
+    kernels = [gbs for k, gbs in stream.get(threads, {}).items() if k != GATHER]
+    return max(kernels) if kernels else float("nan")
+
+
+def line_rate(stream, threads):
+    """GB/s of lines read at random on `threads` threads (BM_Stream/gather), or nan."""
+    return stream.get(threads, {}).get(GATHER, float("nan"))
 
 
 PASS_ORDER = ["normals", "edge_forces", "gather", "integrate", "adapt_test", "topology_apply", "layout"]
@@ -313,6 +322,9 @@ def chart_roofline(rows, stream, machine, path):
         for threads, style in zip(sorted(stream), ["--", ":", "-."]):
             ax.axhline(roof(stream, threads), color="0.25", linestyle=style, linewidth=1.2,
                        label=f"STREAM best, {threads}t ({roof(stream, threads):.1f} GB/s)")
+            if math.isfinite(line_rate(stream, threads)):
+                ax.axhline(line_rate(stream, threads), color="tab:red", linestyle=style, linewidth=1.0,
+                           label=f"lines at random, {threads}t ({line_rate(stream, threads):.1f} GB/s)")
         ax.set_xticks(range(len(passes)))
         ax.set_xticklabels(passes, rotation=30, ha="right", fontsize=8)
         ax.set_title(f"N={n}", fontsize=10)
@@ -397,6 +409,11 @@ def default_section(series, paper):
     return lines
 
 
+def event_floor_us(b, stream, threads):
+    """The time an event's modelled lines (counter event_bytes) take at the random-line rate."""
+    return b.counter("event_bytes") / (line_rate(stream, threads) * 1e9) * 1e6
+
+
 def events_section(benches):
     rows = []
     for name, b in benches.items():
@@ -405,18 +422,26 @@ def events_section(benches):
             rows.append((config_key(m["backend"], m["threads"]), int(m["n"]), b))
     if not rows:
         return []
+    stream = stream_bandwidth(benches)
     lines = ["## Events applied as a batch", "",
              "`BM_Events/<backend>/<threads>/<N>` applies the splits and restores of one recorded step of the "
              "prepared state (the adapt pass minus its test alone on a twin of the same state, bench/bench_events.cpp), "
              "per event; no relayout. Median over repetitions of the per-iteration time, and the ratio of the summed "
-             "times (`us_per_event`).", "",
-             "| configuration | N | splits | restores | us per event (median) | us per event (sums) |",
-             "|---|---:|---:|---:|---:|---:|"]
+             "times (`us_per_event`). Where the layout is modelled (the fast backend), the lines one event touches "
+             "(`bench/bytes_moved.cpp`, every line of the rows of its five vertices, five edges, four triangles "
+             "and record) set against the rate at which the machine serves lines at random on the same thread "
+             "count (`BM_Stream/gather`) give the event's floor: the time its lines take if each one misses.", "",
+             "| configuration | N | splits | restores | us per event (median) | us per event (sums) | lines | "
+             "floor us | event / floor |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
     keys = order_configs({r[0] for r in rows})
     for key, n, b in sorted(rows, key=lambda r: (keys.index(r[0]), r[1])):
         other = " (**iterations applied another batch**)" if any(v > 0 for v in b.counters.get("mismatch", [])) else ""
+        floor = event_floor_us(b, stream, key[1])
+        bound = (f"{b.counter('event_bytes') / 64:.0f} | {floor:.2f} | {b.counter('us_per_event') / floor:.1f}x"
+                 if math.isfinite(floor) else "- | - | -")
         lines.append(f"| {short(key)} | {n} | {b.counter('splits'):,.0f} | {b.counter('restores'):,.0f} | "
-                     f"{1000.0 * b.median():.2f} | {b.counter('us_per_event'):.2f}{other} |")
+                     f"{1000.0 * b.median():.2f} | {b.counter('us_per_event'):.2f}{other} | {bound} |")
     lines.append("")
     return lines
 

@@ -1,0 +1,58 @@
+"""scripts/bench_report.py's rooflines on synthetic benchmarks: the STREAM roof leaves out the
+random-line kernel (BM_Stream/gather), and an event's floor is its modelled bytes at that
+kernel's rate on the event's thread count. Wrong code this catches: the gather kernel taken as
+the roof (it is the lowest, so every pass would look closer to memory-bound), the floor computed
+from the streaming rate or from the other thread count's line rate, bytes read as lines."""
+import os
+import sys
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "scripts"))
+import bench_report  # noqa: E402
+
+
+def bench(name, ms, **counters):
+    b = bench_report.Bench(name)
+    b.times = [ms]
+    b.counters = {k: [v] for k, v in counters.items()}
+    return b
+
+
+def benches():
+    out = {}
+    for kernel, threads, gbs in [("read", 1, 9e9), ("triad", 1, 14e9), ("gather", 1, 16e9),
+                                 ("read", 2, 15e9), ("triad", 2, 19e9), ("gather", 2, 8e9)]:
+        name = f"BM_Stream/{kernel}/{threads}/128"
+        out[name] = bench(name, 10.0, bytes_per_second=gbs)
+    # 128 lines of 64 bytes an event; 4 us per event on 1 thread, 2 on 2.
+    for threads, us in [(1, 4.0), (2, 2.0)]:
+        name = f"BM_Events/fast/{threads}/256/iterations:8/manual_time"
+        out[name] = bench(name, us / 1000.0, us_per_event=us, event_bytes=128 * 64.0, splits=10, restores=5,
+                          mismatch=0)
+    return out
+
+
+class Rooflines(unittest.TestCase):
+    def test_roof_is_the_best_streaming_kernel(self):
+        # On 1 thread the synthetic line rate (16) beats every streaming kernel: still no roof.
+        stream = bench_report.stream_bandwidth(benches())
+        self.assertEqual(bench_report.roof(stream, 1), 14.0)
+        self.assertEqual(bench_report.roof(stream, 2), 19.0)
+        self.assertEqual(bench_report.line_rate(stream, 1), 16.0)
+        self.assertEqual(bench_report.line_rate(stream, 2), 8.0)
+
+    def test_event_floor_is_its_lines_at_the_random_line_rate(self):
+        rows = [line for line in bench_report.events_section(benches()) if line.startswith("| fast")]
+        self.assertEqual(len(rows), 2)
+        # 8192 bytes at 16 GB/s: 0.512 us, the event 4 us: 7.8x; on 2 threads 8 GB/s: 1.024 us, 2.0x.
+        self.assertTrue(rows[0].endswith("| 128 | 0.51 | 7.8x |"), rows[0])
+        self.assertTrue(rows[1].endswith("| 128 | 1.02 | 2.0x |"), rows[1])
+
+    def test_no_line_rate_no_floor(self):
+        b = {k: v for k, v in benches().items() if "gather" not in k}
+        rows = [line for line in bench_report.events_section(b) if line.startswith("| fast")]
+        self.assertTrue(all(r.endswith("| - | - | - |") for r in rows), rows)
+
+
+if __name__ == "__main__":
+    unittest.main()
