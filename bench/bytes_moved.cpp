@@ -12,19 +12,21 @@ namespace {
 constexpr double kF = 4, kI = 4, kU8 = 1;   // float, int32 id, flag byte
 constexpr double kF4 = 16, kOut = 32;       // Float4 (vertex rows, g, area), EdgeOut record
 constexpr double kEdge = 36, kHead = 8;     // EdgeRecord (the edge's topology and l0), ListHead
+constexpr double kFace = 24;                // a triangle slot's corners and sides
 static_assert(sizeof(fast::Float4) == kF4 && sizeof(fast::EdgeOut) == kOut && sizeof(fast::EdgeRecord) == kEdge &&
-              sizeof(fast::ListHead) == kHead);
+              sizeof(fast::ListHead) == kHead && sizeof(fast::Face) == kFace);
 constexpr double kLine = 64;
 
 /// One vertex's list: its head (block start, count, room) and its share of the pool.
 double list_row(double room) { return kHead + kI * room; }
 double block_lines(double room) { return std::ceil(kI * room / kLine); }
 
-// triangle_areas: per triangle slot its corners v0..v2 and alive in, its area vector out; the
+// triangle_areas: per triangle slot its record (corners and sides: read whole) and alive in, its
+// area vector out; the
 // corners' position rows once per vertex.
 // vertex_normals: per vertex its triangle list, the normal row out; each area once.
 double normals(const LayoutSizes& s) {
-  const double areas = s.triangles * (3 * kI + kU8 + kF4) + s.vertices * kF4;
+  const double areas = s.triangles * (kFace + kU8 + kF4) + s.vertices * kF4;
   const double sums = s.vertices * (list_row(s.room_t) + kF4) + s.triangles * kF4;
   return areas + sums;
 }
@@ -62,10 +64,11 @@ double adapt_test(const LayoutSizes& s) {
 // Lines of one element's row, each array's entry on its own line (random access in SoA): a
 // vertex's four rows (position, velocity, normal, rest position), lid, phys, its two list heads
 // and its four adjacency blocks; an edge's record (at most two lines: 36
-// bytes straddle a line boundary for half the slots), lid and phys; a triangle's 10 arrays. The
+// bytes straddle a line boundary for half the slots), lid and phys; a triangle's record (24
+// bytes, at most two lines), alive, area, lid and phys. The
 // step's scratch (step_scratch.h) is no part of a row: no event reads or writes it.
 double vertex_lines(const LayoutSizes& s) { return 4 + 2 + 2 + 2 * block_lines(s.room_e) + 2 * block_lines(s.room_t); }
-constexpr double kEdgeLines = 2 + 2, kTriangleLines = 10;
+constexpr double kEdgeLines = 2 + 2, kTriangleLines = 2 + 4;
 constexpr double kRecordLines = double((sizeof(fast::SplitRecord) + 63) / 64);
 
 // One split or restore touches the five vertices n, i, j, l, r, the five edges e, e_in, e_nj,
@@ -86,7 +89,7 @@ double topology_apply(const LayoutSizes& s, double events) {
 double layout(const LayoutSizes& s) {
   const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t);
   const double edge = kEdge + 2 * kI;
-  const double triangle = 6 * kI + kU8 + kF4 + 2 * kI;
+  const double triangle = kFace + kU8 + kF4 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
 }
 }  // namespace

@@ -19,16 +19,16 @@ double norm(const D3& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); 
 
 // Triangle t's side out of corner v (its edge from v to the next corner), or -1.
 int side_from(const Triangles& T, int t, int v) {
-  const std::array<int, 3> c = T.corners(t), e{T.e0[t], T.e1[t], T.e2[t]};
+  const Face& f = T[t];
   for (int k = 0; k < 3; ++k)
-    if (c[k] == v) return e[k];
+    if (f.v[k] == v) return f.e[k];
   return -1;
 }
 
 // Triangle t with corner `from` moved to `to`, keeping the rotation: the side into the corner
 // becomes edge `in`, the side out of it edge `out`, the third side stays. Read before detach(t).
 Face moved_corner(const Triangles& T, int t, int from, int to, int in, int out) {
-  Face f{T.corners(t), {T.e0[t], T.e1[t], T.e2[t]}};
+  Face f = T[t];
   for (int k = 0; k < 3; ++k)
     if (f.v[k] == from) f.v[k] = to, f.e[k] = out, f.e[(k + 2) % 3] = in;
   return f;

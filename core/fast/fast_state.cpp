@@ -128,7 +128,7 @@ Snapshot FastSimulator::snapshot() const {
   }
   for (int id = 0; id < topo_.T.size(); ++id) {
     const int t = topo_.T.phys[id];
-    s.triangles.push_back(topo_.T.alive[t] ? std::array<int, 3>{vid(topo_.T.v0[t]), vid(topo_.T.v1[t]), vid(topo_.T.v2[t])}
+    s.triangles.push_back(topo_.T.alive[t] ? std::array<int, 3>{vid(topo_.T[t].v[0]), vid(topo_.T[t].v[1]), vid(topo_.T[t].v[2])}
                                            : std::array<int, 3>{-1, -1, -1});
   }
   return s;

@@ -24,11 +24,12 @@ namespace crumple::fast {
 // Zen 4 executes vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
 // itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
-CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0, const std::int32_t* __restrict v1,
-                         const std::int32_t* __restrict v2, const std::uint8_t* __restrict alive,
-                         const Float4* __restrict xm, float unit, Float4* __restrict area, int begin, int end) {
+CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, const std::uint8_t* __restrict alive,
+                                               const Float4* __restrict xm, float unit, Float4* __restrict area,
+                                               int begin, int end) {
   for (int t = begin; t < end; ++t) {
-    const Float4 pa = xm[v0[t]], pb = xm[v1[t]], pc = xm[v2[t]];
+    const Face& f = faces[t];
+    const Float4 pa = xm[f.v[0]], pb = xm[f.v[1]], pc = xm[f.v[2]];
     const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
     const float wx = (pc.x - pa.x) * unit, wy = (pc.y - pa.y) * unit, wz = (pc.z - pa.z) * unit;
     const float on = alive[t] ? 1.0f : 0.0f;
@@ -38,8 +39,7 @@ CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const std::int32_t* __restrict v0
 }  // namespace
 
 void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end) {
-  triangle_areas_body(m.T.v0.data(), m.T.v1.data(), m.T.v2.data(), m.T.alive.data(), m.V.xm.data(), unit, area,
-                      begin, end);
+  triangle_areas_body(m.T.slots.data(), m.T.alive.data(), m.V.xm.data(), unit, area, begin, end);
 }
 
 namespace {

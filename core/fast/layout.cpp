@@ -101,6 +101,7 @@ template <> Array<std::int32_t>& spare(LayoutScratch& s) { return s.spare_i; }
 template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
 template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
 template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
+template <> Array<Face>& spare(LayoutScratch& s) { return s.spare_faces; }
 
 /// a[new] = f(a[order[new]]): gathered into the spare buffer, which then swaps with a (keeping
 /// a's reserved room).
@@ -219,6 +220,7 @@ LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   copy_warm(spare_u8, o.spare_u8);
   copy_warm(spare_f4, o.spare_f4);
   copy_warm(spare_edges, o.spare_edges);
+  copy_warm(spare_faces, o.spare_faces);
   return *this;
 }
 
@@ -245,7 +247,7 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   s.key.resize(nt);
   par.run(nt, kGrain, [&](int b, int e) {
     for (int t = b; t < e; ++t)
-      s.key[t] = T.alive[t] ? std::min({vnew[T.v0[t]], vnew[T.v1[t]], vnew[T.v2[t]]}) : nv;
+      s.key[t] = T.alive[t] ? std::min({vnew[T[t].v[0]], vnew[T[t].v[1]], vnew[T[t].v[2]]}) : nv;
   });
   counting_order(par, s, nv + 1, s.torder);
   inverse(par, s.torder, s.tnew);
@@ -277,13 +279,14 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Triangles (dead ones keep corners 0 and no edges).
   const std::uint8_t* old_alive = T.alive.data();
-  for (Array<std::int32_t>* a : {&T.v0, &T.v1, &T.v2})
-    permute(par, s, *a, torder, [&](std::int32_t v) { return std::int32_t(vnew[v]); });
+  permute(par, s, T.slots, torder, [&](Face f) {
+    for (int k = 0; k < 3; ++k) f.v[k] = std::int32_t(vnew[f.v[k]]), f.e[k] = emap(f.e[k]);
+    return f;
+  });
   par.run(nt, kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k)
-      if (!old_alive[torder[k]]) T.v0[k] = T.v1[k] = T.v2[k] = 0;
+      if (!old_alive[torder[k]]) T[k].v = kNoFace.v;
   });
-  for (Array<std::int32_t>* a : {&T.e0, &T.e1, &T.e2}) permute(par, s, *a, torder, emap);
   permute(par, s, T.area, torder);
   permute(par, s, T.lid, torder);
   permute(par, s, T.alive, torder);  // last: read above

@@ -41,6 +41,7 @@ struct LayoutScratch {
   Array<std::uint8_t> spare_u8;
   Array<Float4> spare_f4;
   Array<EdgeRecord> spare_edges;
+  Array<Face> spare_faces;
 };
 
 /// Reorders the slots of m as described above and resets the vertices' `created` counter.

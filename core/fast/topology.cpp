@@ -39,7 +39,7 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   // Blocks of the usual room, and as much again for lists that move before a relayout repacks.
   reserve_all(nv * 2 * kMinRoom, V.springs, V.nbrs, V.tris, V.wings);
   reserve_all(ne, E.slots, E.lid, E.phys);
-  reserve_all(nt, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area, T.lid, T.phys);
+  reserve_all(nt, T.slots, T.alive, T.area, T.lid, T.phys);
   records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
 
@@ -105,8 +105,10 @@ void Topology::fit() {
   }
   for (Array<std::int32_t>* ids : {&V.lid, &V.phys, &E.lid, &E.phys, &T.lid, &T.phys}) ids->keep_warm();
   if (const std::size_t n = E.lid.size(); n != E.slots.size()) grow(n, E.slots);
-  if (const std::size_t n = T.lid.size(); n != T.v0.size())
-    grow(n, T.v0, T.v1, T.v2, T.e0, T.e1, T.e2, T.alive, T.area);
+  if (const std::size_t n = T.lid.size(), old = T.slots.size(); n != old) {
+    grow(n, T.slots, T.alive, T.area);
+    std::fill(T.slots.begin() + std::ptrdiff_t(old), T.slots.end(), kNoFace);
+  }
 }
 
 void Topology::release_vertex(int v) {
@@ -149,15 +151,13 @@ int Topology::new_triangle() {
 }
 
 void Topology::init_triangle(int t) {
-  T.v0[t] = T.v1[t] = T.v2[t] = 0;
-  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+  T[t] = kNoFace;
   T.alive[t] = 1;
   T.area[t] = Float4{};
 }
 
 void Topology::release_triangle(int t) {
-  T.v0[t] = T.v1[t] = T.v2[t] = 0;
-  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+  T[t] = kNoFace;
   T.alive[t] = 0;
   T.area[t] = Float4{};
 }
@@ -231,22 +231,21 @@ bool Topology::attach(int t, const Face& f) {
     slot = t;
     (forward ? E[e].wl : E[e].wr) = w;
   }
-  T.v0[t] = f.v[0], T.v1[t] = f.v[1], T.v2[t] = f.v[2];
-  T.e0[t] = f.e[0], T.e1[t] = f.e[1], T.e2[t] = f.e[2];
+  T[t] = f;
   for (int k = 0; k < 3; ++k) list_tri(f.v[k], (t << 2) | k, f.e[(k + 1) % 3]);  // opposite edge
   return true;
 }
 
 void Topology::detach(int t) {
-  const int v[3] = {T.v0[t], T.v1[t], T.v2[t]};
-  const int es[3] = {T.e0[t], T.e1[t], T.e2[t]};
+  const Face f = T[t];
+  const std::array<int, 3>&v = f.v, &es = f.e;
   for (int e : es) {
     if (e < 0) continue;
     if (E[e].tri0 == t) E[e].tri0 = E[e].wl = -1;
     if (E[e].tri1 == t) E[e].tri1 = E[e].wr = -1;
   }
   for (int k = 0; k < 3; ++k) unlist_tri(v[k], (t << 2) | k);
-  T.e0[t] = T.e1[t] = T.e2[t] = -1;
+  T[t].e = kNoFace.e;
 }
 
 // Appends move a full list first, which only serial code may do: parallel edits reserve room
@@ -330,14 +329,14 @@ std::string Topology::check() const {
   };
   if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return fail("vertex logical ids are not a bijection");
   if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return fail("edge logical ids are not a bijection");
-  if (!bijective(T.lid, T.phys) || T.lid.size() != T.v0.size()) return fail("triangle logical ids are not a bijection");
+  if (!bijective(T.lid, T.phys) || T.lid.size() != T.slots.size()) return fail("triangle logical ids are not a bijection");
   std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
   for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;
   for (int e : E.free_ids) edge_free[E.phys[e]] = 1;
   for (int t = 0; t < T.size(); ++t) {
     if (!T.alive[t]) continue;
     const auto v = T.corners(t);
-    const int es[3] = {T.e0[t], T.e1[t], T.e2[t]};
+    const std::array<int, 3>& es = T[t].e;
     for (int k = 0; k < 3; ++k) {
       const int p = v[k], q = v[(k + 1) % 3], e = es[k];
       if (vertex_dead[p]) return fail("triangle ", t, " uses dead vertex ", p);

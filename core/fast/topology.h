@@ -71,12 +71,16 @@ struct Freed {
   int record = -1;                           ///< the split record
 };
 
-/// A triangle as attach() links it: corners counter-clockwise about the normal, and the mesh
-/// edge of each side, e[k] joining v[k] and v[(k + 1) % 3] (as Triangles' e_k).
+/// A triangle: corners counter-clockwise about the normal, and the mesh edge of each side, e[k]
+/// joining v[k] and v[(k + 1) % 3]. What attach() links, and each triangle slot's record (24
+/// bytes: an event reads a triangle's topology in one or two lines).
 struct Face {
-  std::array<int, 3> v{-1, -1, -1};
-  std::array<int, 3> e{-1, -1, -1};
+  std::array<std::int32_t, 3> v{-1, -1, -1};
+  std::array<std::int32_t, 3> e{-1, -1, -1};
 };
+static_assert(sizeof(Face) == 24);
+/// A dead (or not yet linked) triangle slot: corners 0, no edges (harmless values, topology.h).
+constexpr Face kNoFace{{0, 0, 0}, {-1, -1, -1}};
 
 /// Where one vertex's list lives in its pool (see the file comment): 8 bytes, so that a pass
 /// reads a list's head with one load and an event edits it in one line.
@@ -147,16 +151,17 @@ struct Edges {
 };
 
 struct Triangles {
-  Array<std::int32_t> v0, v1, v2;  ///< corners, counter-clockwise about the normal
-  Array<std::int32_t> e0, e1, e2;  ///< e_k joins v_k and v_(k+1)
+  Array<Face> slots;               ///< corners and sides of each slot (kNoFace when dead)
   Array<std::uint8_t> alive;       ///< 1: in use
   Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
   Array<std::int32_t> lid;         ///< logical id of each slot
   Array<std::int32_t> phys;        ///< slot of each logical id
   std::vector<int> free_ids;       ///< LIFO free list of logical ids
 
-  int size() const { return int(v0.size()); }
-  std::array<int, 3> corners(int t) const { return {v0[t], v1[t], v2[t]}; }
+  Face& operator[](int t) { return slots[std::size_t(t)]; }
+  const Face& operator[](int t) const { return slots[std::size_t(t)]; }
+  int size() const { return int(slots.size()); }
+  std::array<int, 3> corners(int t) const { return slots[std::size_t(t)].v; }
 };
 
 /// The whole mesh and the serial edits of its topology.
