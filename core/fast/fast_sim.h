@@ -7,11 +7,11 @@
 //              vertex over its adjacency lists: no scatter, no atomics, one summation order.
 //              The vertex state lives in 16-byte rows (position with mass, velocity with mass,
 //              normal: topology.h), and the edge pass reads each of an edge's four vertices as
-//              rows, eight edges in AVX lanes
-//              (lanes8.h). It stores per edge only what the gather cannot compute from the
-//              endpoints' rows (force and bending, 32 bytes); the gather sums those records as
-//              wide rows (wide.h), the first 8 entries of a list in a loop of fixed length (no
-//              exit mispredicted per list), and the implicit blocks W_e, kappa_e = kappa
+//              rows, eight edges in AVX lanes (lanes8.h). It stores per edge only what the
+//              gather cannot compute from the endpoints' rows (force and bending, 32 bytes);
+//              the gather sums those records as wide rows (wide.h), the first 8 entries of a
+//              list in a loop of fixed length (no exit mispredicted per list), and the
+//              implicit blocks W_e, kappa_e = kappa
 //              (m_a + m_b) (D15), from the neighbours' velocity rows. Springs are evaluated once
 //              per edge, not once from each side: a second set of square roots would cost more
 //              than the per-edge output does. What was measured and not kept for this pass is in

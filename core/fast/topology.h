@@ -1,10 +1,12 @@
-// The fast backend's mesh: structure-of-arrays topology and state (Jolt's split of immutable-ish
-// topology from per-step state, Box2D's hot/cold split), and the serial topology edits. What
-// only one step's passes read (rows, per-edge outputs, forces, guesses) is not here but in
-// step_scratch.h.
+// The fast backend's mesh: topology and state in per-slot arrays of small records (Jolt's split
+// of immutable-ish topology from per-step state, Box2D's hot/cold split), and the serial
+// topology edits. What only one step's passes read (per-edge outputs, forces, guesses) is not
+// here but in step_scratch.h.
 //
-// Vertices, edges and triangles are *slots* in parallel arrays (an edge's topology in one record
-// per slot, EdgeRecord, which an event reads whole), and each slot carries a logical
+// Vertices, edges and triangles are *slots* in parallel arrays, each array one record per slot
+// that a pass or an event reads in one load or line: a vertex's state in 16-byte rows
+// (position, velocity, normal, rest position) and its two list heads, an edge's topology in an
+// EdgeRecord, a triangle's in a Face. Each slot carries a logical
 // id (`lid`) with its inverse map (`phys`). Logical ids follow the id policy of sim/simulator.h,
 // identical to the reference's (removed ids on LIFO free lists), so the random stream keyed by
 // edge id gives the same decisions and snapshots list elements in the same order; slots are
@@ -12,7 +14,8 @@
 // any logical id. Everything inside the backend (kernels, adjacency, records) speaks slots; only
 // the random stream, the event order and the Simulator interface speak logical ids. A freed slot
 // keeps its logical id, so reusing the id reuses the slot. A dead element keeps harmless values:
-// mass 0, no adjacency, an edge in no list joining vertex 0 to itself (zero length, no force).
+// mass 0, no adjacency, an edge in no list joining vertex 0 to itself (zero length, no force),
+// a triangle with corners 0 and no edges (kNoFace).
 //
 // Adjacency is what makes every force pass a race-free *gather*: each vertex lists its springs
 // and its triangles, each list in a block of its own in a pool shared by all vertices (a block
