@@ -111,7 +111,11 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
   const __m256 kappa = _mm256_set1_ps(c.kappa), damping = _mm256_set1_ps(c.damping), bend = _mm256_set1_ps(c.bend);
   const __m256 quarter = _mm256_set1_ps(c.balanced ? 0.25f : 0.0f), half = _mm256_set1_ps(0.5f);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-  alignas(32) EdgeOut spare[8];  // where lanes past the range store
+  // Where lanes past the range store (never read). Per thread and off the stack: a stack array
+  // would be zeroed on every call, and ThreadSanitizer, which cannot see oneTBB's
+  // uninstrumented wait, then reports that write against a worker's atomic write to an earlier
+  // loop's wait node that lived at the same stack address (a false race, tests/tsan.supp).
+  alignas(32) static thread_local EdgeOut spare[8];
   for (int e0 = begin; e0 < end; e0 += 8) {
     int a[8], b[8], l[8], r[8];
     alignas(32) float hinge[8], rest[8];
