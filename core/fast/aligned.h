@@ -1,5 +1,6 @@
 // Cache-line aligned storage for the structure-of-arrays state: every attribute is one
-// contiguous array, 64-byte aligned so that AVX-512 loads of a lane group never split a line.
+// contiguous array, 64-byte aligned so that AVX-512 loads of a lane group never split a line,
+// large arrays on transparent huge pages.
 #pragma once
 
 #include <algorithm>
@@ -9,15 +10,24 @@
 
 namespace crumple::fast {
 
+/// Arrays of at least this many bytes start on a huge-page boundary and ask the kernel for
+/// transparent huge pages (madvise mode, Debian's default, gives them only to memory that asks):
+/// the passes and the events read the large arrays at random, and with 4 KiB pages nearly every
+/// such read also misses the TLB (the L2 TLB maps a few MB; the state of N = 256 is ~100 MB).
+constexpr std::size_t kHugePage = std::size_t(2) << 20;
+
+/// Allocation of `bytes` bytes, 64-byte aligned (huge-page aligned and advised when large).
+void* allocate_aligned(std::size_t bytes);
+void free_aligned(void* p, std::size_t bytes);
+
 template <class T>
 struct AlignedAllocator {
   using value_type = T;
-  static constexpr std::align_val_t kAlign{64};
   AlignedAllocator() = default;
   template <class U>
   AlignedAllocator(const AlignedAllocator<U>&) {}
-  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlign)); }
-  void deallocate(T* p, std::size_t) { ::operator delete(p, kAlign); }
+  T* allocate(std::size_t n) { return static_cast<T*>(allocate_aligned(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) { free_aligned(p, n * sizeof(T)); }
   template <class U>
   bool operator==(const AlignedAllocator<U>&) const { return true; }
 };

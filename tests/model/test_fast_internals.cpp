@@ -73,6 +73,25 @@ TEST(Array, CopyKeepsRoomAndWarmingKeepsElements) {
   EXPECT_EQ(c.data(), before);  // grew into its room, no reallocation
 }
 
+
+// Small arrays start on a cache line, large ones on a huge page (so that transparent huge pages
+// can back them from their first byte), and both keep their elements through growth. Catches an
+// allocation that loses the alignment the kernels' aligned loads assume, or a large array left
+// on 4 KiB-aligned memory the kernel cannot give huge pages to.
+TEST(Array, SmallArraysStartOnALineLargeOnesOnAHugePage) {
+  auto offset = [](const void* p, std::size_t align) { return reinterpret_cast<std::uintptr_t>(p) % align; };
+  for (std::size_t n : {std::size_t(1), std::size_t(100), fast::kHugePage / sizeof(float) - 1}) {
+    fast::Array<float> small(n, 1.0f);
+    EXPECT_EQ(offset(small.data(), 64), 0u) << n;
+  }
+  fast::Array<fast::Float4> large;
+  large.reserve(fast::kHugePage / sizeof(fast::Float4) * 3);
+  EXPECT_EQ(offset(large.data(), fast::kHugePage), 0u);
+  for (int k = 0; k < 1000; ++k) large.push_back(fast::Float4{float(k), 0, 0, 1});
+  large.reserve(large.capacity() * 2);  // reallocates: the elements move to another huge page
+  EXPECT_EQ(offset(large.data(), fast::kHugePage), 0u);
+  for (int k = 0; k < 1000; ++k) ASSERT_EQ(large[k].x, float(k));
+}
 // A vectorized kernel's chunks start on lane boundaries, on any thread count, and cover the
 // range once: so each item is computed by the same code path however the range is split.
 TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
