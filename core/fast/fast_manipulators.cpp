@@ -1,6 +1,7 @@
 // The fast backend's manipulators (sim/manipulators.h): grab forces joined to the gathered
 // forces and the first Jacobi guess, the position passes (spheres and planes as one range
 // kernel over vertex slots, then the pins), and the render buffers in logical ids.
+#include <algorithm>
 #include <cmath>
 
 #include "fast/fast_sim.h"
@@ -84,6 +85,10 @@ void FastSimulator::apply_manipulators() {
   }
 }
 
+// The buffers are per logical id while the state is in slots: the vertex copy runs over slots
+// (rows read in order, each written to its id's place: scattered writes do not stall as
+// scattered reads do), the triangles in fixed blocks of ids, each block's live triangles
+// counted first so that every block writes its own range (the same buffer on any thread count).
 void FastSimulator::render(RenderBuffers& out, bool triangles) {
   if (!normals_valid_) {  // the same normals the next step would compute first
     compute_normals();
@@ -93,23 +98,43 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
   out.positions.assign(3 * std::size_t(V.size()), 0.0f);
   out.normals.assign(3 * std::size_t(V.size()), 0.0f);
   par_.run(V.size(), kPassGrain, [&](int b, int e) {
-    for (int id = b; id < e; ++id) {
-      const int v = V.phys[id];
+    for (int v = b; v < e; ++v) {
       if (!(V.mass(v) > 0)) continue;
-      float* x = &out.positions[3 * std::size_t(id)];
-      float* n = &out.normals[3 * std::size_t(id)];
+      const std::size_t id = std::size_t(V.lid[v]);
       const Float4 p = V.xm[v], nv = V.nr[v];
+      float* x = &out.positions[3 * id];
+      float* n = &out.normals[3 * id];
       x[0] = p.x, x[1] = p.y, x[2] = p.z;
       n[0] = nv.x, n[1] = nv.y, n[2] = nv.z;
     }
   });
-  if (!triangles) return;
-  out.triangles.clear();
-  for (int id = 0; id < topo_.T.size(); ++id) {
-    const int t = topo_.T.phys[id];
-    if (!topo_.T.alive[t]) continue;
-    for (int c : topo_.T.corners(t)) out.triangles.push_back(std::uint32_t(V.lid[c]));
-  }
+  if (triangles) render_triangles(out.triangles);
+}
+
+void FastSimulator::render_triangles(std::vector<std::uint32_t>& out) {
+  constexpr int kBlock = 8192;  ///< ids per block: fixed, so the buffer does not depend on threads
+  constexpr int kAhead = 16;    ///< ids ahead whose triangle record is prefetched (a random slot)
+  const Triangles& T = topo_.T;
+  const int n = T.size(), blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::size_t>& start = render_scratch_;
+  start.assign(std::size_t(blocks) + 1, 0);
+  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b)
+      for (int id = b * kBlock, last = std::min(n, id + kBlock); id < last; ++id) start[b + 1] += T.alive[T.phys[id]];
+  });
+  for (int b = 0; b < blocks; ++b) start[b + 1] += start[b];
+  out.resize(3 * start[blocks]);
+  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
+    for (int b = b0; b < b1; ++b) {
+      std::uint32_t* to = out.data() + 3 * start[b];
+      for (int id = b * kBlock, last = std::min(n, id + kBlock); id < last; ++id) {
+        if (id + kAhead < last) __builtin_prefetch(&T[T.phys[id + kAhead]]);
+        const int t = T.phys[id];
+        if (!T.alive[t]) continue;
+        for (int c : T.corners(t)) *to++ = std::uint32_t(topo_.V.lid[c]);
+      }
+    }
+  });
 }
 
 }  // namespace crumple::fast

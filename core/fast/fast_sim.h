@@ -157,6 +157,7 @@ class FastSimulator final : public Simulator {
   /// All of a restore but the free lists (safe in parallel for restores of disjoint
   /// vertices): returns what it freed, for Topology::free_ids.
   Freed restore_edge_local(int e);
+  void render_triangles(std::vector<std::uint32_t>& out);  ///< the live triangles' corner ids, by id
 
   Params params_;
   AdaptClock adapt_clock_;  ///< which steps run the fracture/restoration pass
@@ -186,6 +187,7 @@ class FastSimulator final : public Simulator {
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   bool serial_edits_ = false;             ///< see set_serial_edits
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
+  std::vector<std::size_t> render_scratch_;  ///< render_triangles' block starts
   bool normals_valid_ = false;            ///< normals and areas match the current state
   std::array<double, int(Pass::kCount)> pass_seconds_{};
 };

@@ -9,13 +9,67 @@
 namespace crumple::fast {
 
 namespace {
-/// One block's share of the totals: sums in double, maxima, and whether any state was not finite.
+/// One block's share of the totals: sums in double, maxima, counts, and whether any state was
+/// not finite.
 struct TotalsPart {
   double mass = 0, momentum[3] = {0, 0, 0}, kinetic = 0, max_speed = 0, max_distance = 0;
   double max_strain = 0, strain2 = 0;
+  int mesh_edges = 0, auxiliary = 0;
   bool finite = true;
 };
 constexpr int kTotalsBlock = 8192;  ///< ids per block: fixed, so the sums do not depend on threads
+/// The sums run in logical order, so each id's slot is a random read: the rows of the id this
+/// far ahead are prefetched (an edge's record twice as far, its endpoints' rows this far), so
+/// that the reads overlap instead of waiting one after the other.
+constexpr int kTotalsAhead = 16;
+
+void vertex_totals(const Vertices& V, const double c[3], int begin, int end, TotalsPart& t) {
+  for (int id = begin; id < end; ++id) {
+    if (id + kTotalsAhead < end) {
+      const int ahead = V.phys[id + kTotalsAhead];
+      __builtin_prefetch(&V.xm[ahead]), __builtin_prefetch(&V.vm[ahead]);
+    }
+    const int v = V.phys[id];
+    if (!(V.mass(v) > 0)) continue;
+    const double m = V.mass(v), vx = V.vm[v].x, vy = V.vm[v].y, vz = V.vm[v].z;
+    t.mass += m;
+    t.momentum[0] += m * vx;
+    t.momentum[1] += m * vy;
+    t.momentum[2] += m * vz;
+    const double v2 = vx * vx + vy * vy + vz * vz;
+    t.kinetic += 0.5 * m * v2;
+    t.max_speed = std::max(t.max_speed, std::sqrt(v2));
+    const double dx = V.xm[v].x - c[0], dy = V.xm[v].y - c[1], dz = V.xm[v].z - c[2];
+    t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
+    t.finite &= bool(std::isfinite(V.xm[v].x + V.xm[v].y + V.xm[v].z + v2));
+  }
+}
+
+void edge_totals(const Edges& E, const Vertices& V, int begin, int end, TotalsPart& t) {
+  for (int id = begin; id < end; ++id) {
+    if (id + 2 * kTotalsAhead < end) {
+      const char* record = reinterpret_cast<const char*>(&E[E.phys[id + 2 * kTotalsAhead]]);
+      __builtin_prefetch(record), __builtin_prefetch(record + sizeof(EdgeRecord) - 1);
+    }
+    if (id + kTotalsAhead < end) {
+      const EdgeRecord& ahead = E[E.phys[id + kTotalsAhead]];
+      __builtin_prefetch(&V.xm[ahead.a]), __builtin_prefetch(&V.xm[ahead.b]);
+    }
+    const int e = E.phys[id];
+    const std::uint8_t flags = E[e].flags;
+    if (!(flags & kAlive)) continue;
+    if (!(flags & kMesh)) {
+      ++t.auxiliary;
+      continue;
+    }
+    ++t.mesh_edges;
+    const int a = E[e].a, b = E[e].b;
+    const double dx = double(V.xm[a].x) - V.xm[b].x, dy = double(V.xm[a].y) - V.xm[b].y, dz = double(V.xm[a].z) - V.xm[b].z;
+    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E[e].l0 - 1.0;
+    t.max_strain = std::max(t.max_strain, std::abs(strain));
+    t.strain2 += strain * strain;
+  }
+}
 }  // namespace
 
 // Sums over logical ids (the layout does not change them), in fixed blocks of ids whose partial
@@ -28,43 +82,13 @@ Totals FastSimulator::totals() const {
   const int vblocks = (nv + kTotalsBlock - 1) / kTotalsBlock, eblocks = (ne + kTotalsBlock - 1) / kTotalsBlock;
   std::vector<TotalsPart> parts(std::size_t(std::max(vblocks, eblocks)));
   par_.run(vblocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      TotalsPart& t = parts[b];
-      for (int id = b * kTotalsBlock, last = std::min(nv, id + kTotalsBlock); id < last; ++id) {
-        const int v = V.phys[id];
-        if (!(V.mass(v) > 0)) continue;
-        const double m = V.mass(v), vx = V.vm[v].x, vy = V.vm[v].y, vz = V.vm[v].z;
-        t.mass += m;
-        t.momentum[0] += m * vx;
-        t.momentum[1] += m * vy;
-        t.momentum[2] += m * vz;
-        const double v2 = vx * vx + vy * vy + vz * vz;
-        t.kinetic += 0.5 * m * v2;
-        t.max_speed = std::max(t.max_speed, std::sqrt(v2));
-        const double dx = V.xm[v].x - c[0], dy = V.xm[v].y - c[1], dz = V.xm[v].z - c[2];
-        t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
-        t.finite &= bool(std::isfinite(V.xm[v].x + V.xm[v].y + V.xm[v].z + v2));
-      }
-    }
+    for (int b = b0; b < b1; ++b) vertex_totals(V, c, b * kTotalsBlock, std::min(nv, (b + 1) * kTotalsBlock), parts[b]);
   });
   par_.run(eblocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      TotalsPart& t = parts[b];
-      for (int id = b * kTotalsBlock, last = std::min(ne, id + kTotalsBlock); id < last; ++id) {
-        const int e = E.phys[id];
-        if ((E[e].flags & (kAlive | kMesh)) != (kAlive | kMesh)) continue;
-        const int a = E[e].a, bb = E[e].b;
-        const double dx = double(V.xm[a].x) - V.xm[bb].x, dy = double(V.xm[a].y) - V.xm[bb].y, dz = double(V.xm[a].z) - V.xm[bb].z;
-        const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E[e].l0 - 1.0;
-        t.max_strain = std::max(t.max_strain, std::abs(strain));
-        t.strain2 += strain * strain;
-      }
-    }
+    for (int b = b0; b < b1; ++b) edge_totals(E, V, b * kTotalsBlock, std::min(ne, (b + 1) * kTotalsBlock), parts[b]);
   });
   Totals T;
   T.vertices = topo_.live_vertices();
-  T.edges = topo_.live_mesh_edges();
-  T.auxiliary = topo_.live_auxiliary();
   T.triangles = topo_.live_triangles();
   bool finite = true;
   for (const TotalsPart& t : parts) {
@@ -75,6 +99,8 @@ Totals FastSimulator::totals() const {
     T.max_distance = std::max(T.max_distance, t.max_distance);
     T.max_strain = std::max(T.max_strain, t.max_strain);
     T.rms_strain += t.strain2;
+    T.edges += t.mesh_edges;
+    T.auxiliary += t.auxiliary;
     finite &= t.finite;
   }
   if (!finite) T.max_distance = NAN;

@@ -202,6 +202,74 @@ TEST(Layout, RelayoutEveryStepChangesNoBit) {
   }
 }
 
+// The totals (fast_state.cpp: blocks of logical ids, read through the slot map with rows
+// prefetched, the edge counts taken in the same loop) do not depend on where the slots are: the
+// same state with slots moved by a relayout every step and with slots never moved gives the
+// same totals bit for bit, and they are the plain sums over the snapshot (the counts exactly,
+// the sums to round-off: the compiler may fuse the core's multiply-adds). With splits, restores
+// and freed ids in the state. Catches a sum in slot order, a dead or auxiliary edge counted as a
+// mesh edge, and a block left out.
+TEST(FastTotals, AreSumsInLogicalOrderWhereverTheSlotsAre) {
+  Params p = churn_params();
+  auto run = [&](double fraction) {
+    auto sim = std::make_unique<fast::FastSimulator>(make_grid(40), p, 2);
+    sim->set_layout_fraction(fraction);
+    long restores = 0;
+    for (int step = 0; step < 120; ++step) restores += sim->step().restores;
+    EXPECT_GT(restores, 50);
+    EXPECT_FALSE(sim->topology().V.free_ids.empty());
+    return sim;
+  };
+  const Snapshot s = run(-1)->snapshot();
+  const Totals never = run(-1)->totals(), every = run(0)->totals();
+  for (const Totals* t : {&never, &every}) {
+    EXPECT_EQ(t->edges, std::count_if(s.edges.begin(), s.edges.end(), [](const EdgeView& e) { return e.a >= 0 && !e.auxiliary; }));
+    EXPECT_EQ(t->auxiliary, std::count_if(s.edges.begin(), s.edges.end(), [](const EdgeView& e) { return e.a >= 0 && e.auxiliary; }));
+  }
+  double mass = 0, momentum[3] = {0, 0, 0}, kinetic = 0;
+  for (std::size_t v = 0; v < s.mass.size(); ++v) {
+    const double m = s.mass[v];
+    mass += m;
+    for (int d = 0; d < 3; ++d) momentum[d] += m * s.velocity[v][d];
+    kinetic += 0.5 * m * (s.velocity[v][0] * s.velocity[v][0] + s.velocity[v][1] * s.velocity[v][1] + s.velocity[v][2] * s.velocity[v][2]);
+  }
+  EXPECT_EQ(never.mass, mass);  // float masses summed in double in one order: no product to fuse
+  EXPECT_NEAR(never.kinetic, kinetic, 1e-12 * kinetic);
+  for (int d = 0; d < 3; ++d) EXPECT_NEAR(never.momentum[d], momentum[d], 1e-12 * mass) << d;
+  EXPECT_EQ(every.mass, never.mass);
+  for (int d = 0; d < 3; ++d) EXPECT_EQ(every.momentum[d], never.momentum[d]) << d;
+  EXPECT_EQ(every.kinetic, never.kinetic);
+  EXPECT_EQ(every.rms_strain, never.rms_strain);
+  EXPECT_EQ(every.max_strain, never.max_strain);
+  EXPECT_EQ(every.max_speed, never.max_speed);
+  EXPECT_EQ(every.max_distance, never.max_distance);
+}
+
+// The render buffers (fast_manipulators.cpp: vertices copied in slot order to their ids'
+// places, triangles in fixed blocks of ids, each block written at its offset) are the snapshot's
+// vertices and live triangles in id order, with slots moved by relayouts, freed ids in the state
+// and over two blocks of triangle ids. Catches a vertex written at its slot instead of its id, a
+// dead triangle emitted, and blocks out of order or at overlapping offsets.
+TEST(FastRender, BuffersAreTheSnapshotInIdOrder) {
+  Params p = churn_params();
+  fast::FastSimulator sim(make_grid(72), p, 2);  // 10,082 triangles: two blocks of 8,192 ids
+  sim.set_layout_fraction(0);
+  long restores = 0;
+  for (int step = 0; step < 40; ++step) restores += sim.step().restores;
+  ASSERT_GT(restores, 20);
+  ASSERT_FALSE(sim.topology().T.free_ids.empty());
+  RenderBuffers r;
+  sim.render(r, true);
+  const Snapshot s = sim.snapshot();
+  ASSERT_EQ(r.positions.size(), 3 * s.position.size());
+  for (std::size_t k = 0; k < s.position.size(); ++k)
+    for (int c = 0; c < 3; ++c) ASSERT_EQ(r.positions[3 * k + c], float(s.position[k][c])) << k;
+  std::vector<std::uint32_t> live;
+  for (const std::array<int, 3>& t : s.triangles)
+    if (t[0] >= 0) live.insert(live.end(), t.begin(), t.end());
+  EXPECT_EQ(r.triangles, live);
+}
+
 // The relayout's sorts run as per-thread blocks on two threads (layout.cpp's stable_pass): the
 // slot order they give must be the one thread's, element for element. 96 x 96, so that every
 // sort has over two blocks' worth of items.
