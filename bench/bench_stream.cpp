@@ -11,8 +11,8 @@
 // the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
 // Each array is 128 MiB, four times the largest L3 this runs on (32 MiB per Zen CCD), so every
 // pass comes from memory; allocated as the fast backend's state is (on huge pages where the
-// kernel gives them: with 4 KiB pages the gather's lines also miss the TLB). Threads as in the other benchmarks: tbb::global_control caps the
-// parallelism at T; the range is cut into T equal static chunks (static_partitioner), the same
+// kernel gives them: with 4 KiB pages the gather's lines also miss the TLB). Threads as in the
+// other benchmarks: tbb::global_control caps the parallelism at T; the range is cut into T equal static chunks (static_partitioner), the same
 // chunks that first touched the pages, so each thread streams the memory it faulted in.
 // Reported: bytes_per_second (a kIsRate counter of the bytes above: GB/s in the report), and
 // the time per pass (manual time, steady_clock).

@@ -112,8 +112,8 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
 }
 
 void FastSimulator::render_triangles(std::vector<std::uint32_t>& out) {
-  constexpr int kBlock = 8192;  ///< ids per block: fixed, so the buffer does not depend on threads
-  constexpr int kAhead = 16;    ///< ids ahead whose triangle record is prefetched (a random slot)
+  constexpr int kBlock = kReduceBlock;  ///< ids per block: fixed, so the buffer does not depend on threads
+  constexpr int kAhead = 16;            ///< ids ahead whose triangle record is prefetched (a random slot)
   const Triangles& T = topo_.T;
   const int n = T.size(), blocks = (n + kBlock - 1) / kBlock;
   std::vector<std::size_t>& start = render_scratch_;
