@@ -72,7 +72,7 @@ void FastSimulator::collect_events() {
   // edge, and restores free only mesh edges, never a pending (auxiliary) one.
   const int n = int(decisions_.size());
   constexpr int kBlock = 16384;  // ids per block: short per-block lists, and blocks for every thread on a large mesh
-  const int blocks = (n + kBlock - 1) / kBlock;
+  const int blocks = Parallel::blocks_of(n, kBlock);
   by_id_.resize(std::size_t(n), 0);  // all 0 between passes
   auto each_nonzero = [](const std::uint8_t* bytes, int begin, int end, auto&& f) {
     for (int k = begin; k < end;) {
@@ -88,21 +88,17 @@ void FastSimulator::collect_events() {
       ++k;
     }
   };
-  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b)
-      each_nonzero(decisions_.data(), b * kBlock, std::min(n, (b + 1) * kBlock),
-                   [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
+  par_.run_blocks(n, kBlock, [&](int, int begin, int end) {
+    each_nonzero(decisions_.data(), begin, end, [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
   });
   std::vector<std::vector<int>>& found = s.found;  // per block and kind: slots in id order
   found.resize(2 * std::size_t(blocks));
-  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      found[2 * b].clear(), found[2 * b + 1].clear();
-      each_nonzero(by_id_.data(), b * kBlock, std::min(n, (b + 1) * kBlock), [&](int id) {
-        found[2 * b + by_id_[id] - 1].push_back(topo_.E.phys[id]);
-        by_id_[id] = 0;
-      });
-    }
+  par_.run_blocks(n, kBlock, [&](int b, int begin, int end) {
+    found[2 * b].clear(), found[2 * b + 1].clear();
+    each_nonzero(by_id_.data(), begin, end, [&](int id) {
+      found[2 * b + by_id_[id] - 1].push_back(topo_.E.phys[id]);
+      by_id_[id] = 0;
+    });
   });
   for (int kind : {0, 1}) {
     std::vector<int>& slots = kind == 0 ? s.splits : s.restores;

@@ -112,27 +112,24 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
 }
 
 void FastSimulator::render_triangles(std::vector<std::uint32_t>& out) {
-  constexpr int kBlock = kReduceBlock;  ///< ids per block: fixed, so the buffer does not depend on threads
-  constexpr int kAhead = 16;            ///< ids ahead whose triangle record is prefetched (a random slot)
+  constexpr int kAhead = 16;  ///< ids ahead whose triangle record is prefetched (a random slot)
   const Triangles& T = topo_.T;
-  const int n = T.size(), blocks = (n + kBlock - 1) / kBlock;
+  const int n = T.size(), blocks = Parallel::blocks_of(n, kReduceBlock);
+  // Fixed blocks of ids, each block's triangles at its offset: the buffer does not depend on threads.
   std::vector<std::size_t>& start = render_scratch_;
   start.assign(std::size_t(blocks) + 1, 0);
-  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b)
-      for (int id = b * kBlock, last = std::min(n, id + kBlock); id < last; ++id) start[b + 1] += T.alive[T.phys[id]];
+  par_.run_blocks(n, kReduceBlock, [&](int b, int begin, int end) {
+    for (int id = begin; id < end; ++id) start[b + 1] += T.alive[T.phys[id]];
   });
   for (int b = 0; b < blocks; ++b) start[b + 1] += start[b];
   out.resize(3 * start[blocks]);
-  par_.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      std::uint32_t* to = out.data() + 3 * start[b];
-      for (int id = b * kBlock, last = std::min(n, id + kBlock); id < last; ++id) {
-        if (id + kAhead < last) __builtin_prefetch(&T[T.phys[id + kAhead]]);
-        const int t = T.phys[id];
-        if (!T.alive[t]) continue;
-        for (int c : T.corners(t)) *to++ = std::uint32_t(topo_.V.lid[c]);
-      }
+  par_.run_blocks(n, kReduceBlock, [&](int b, int begin, int end) {
+    std::uint32_t* to = out.data() + 3 * start[b];
+    for (int id = begin; id < end; ++id) {
+      if (id + kAhead < end) __builtin_prefetch(&T[T.phys[id + kAhead]]);
+      const int t = T.phys[id];
+      if (!T.alive[t]) continue;
+      for (int c : T.corners(t)) *to++ = std::uint32_t(topo_.V.lid[c]);
     }
   });
 }

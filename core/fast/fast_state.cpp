@@ -17,7 +17,6 @@ struct TotalsPart {
   int mesh_edges = 0, auxiliary = 0;
   bool finite = true;
 };
-constexpr int kTotalsBlock = 8192;  ///< ids per block: fixed, so the sums do not depend on threads
 /// The sums run in logical order, so each id's slot is a random read: the rows of the id this
 /// far ahead are prefetched (an edge's record twice as far, its endpoints' rows this far), so
 /// that the reads overlap instead of waiting one after the other.
@@ -79,14 +78,9 @@ Totals FastSimulator::totals() const {
   const Edges& E = topo_.E;
   const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
   const int nv = V.size(), ne = E.size();
-  const int vblocks = (nv + kTotalsBlock - 1) / kTotalsBlock, eblocks = (ne + kTotalsBlock - 1) / kTotalsBlock;
-  std::vector<TotalsPart> parts(std::size_t(std::max(vblocks, eblocks)));
-  par_.run(vblocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) vertex_totals(V, c, b * kTotalsBlock, std::min(nv, (b + 1) * kTotalsBlock), parts[b]);
-  });
-  par_.run(eblocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) edge_totals(E, V, b * kTotalsBlock, std::min(ne, (b + 1) * kTotalsBlock), parts[b]);
-  });
+  std::vector<TotalsPart> parts(std::size_t(Parallel::blocks_of(std::max(nv, ne), kReduceBlock)));
+  par_.run_blocks(nv, kReduceBlock, [&](int b, int begin, int end) { vertex_totals(V, c, begin, end, parts[b]); });
+  par_.run_blocks(ne, kReduceBlock, [&](int b, int begin, int end) { edge_totals(E, V, begin, end, parts[b]); });
   Totals T;
   T.vertices = topo_.live_vertices();
   T.triangles = topo_.live_triangles();

@@ -37,22 +37,18 @@ template <class Key, class Place>
 void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
   // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
   const int blocks = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
-  const int per = (n + blocks - 1) / blocks;
+  const int per = std::max(1, (n + blocks - 1) / blocks);  // >= 1: no block of zero items
   hist.assign(std::size_t(blocks) * buckets, 0);
-  par.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      int* h = &hist[std::size_t(b) * buckets];
-      for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) ++h[key(k)];
-    }
+  par.run_blocks(n, per, [&](int b, int begin, int end) {
+    int* h = &hist[std::size_t(b) * buckets];
+    for (int k = begin; k < end; ++k) ++h[key(k)];
   });
   int sum = 0;
   for (int c = 0; c < buckets; ++c)
     for (int b = 0; b < blocks; ++b) sum += std::exchange(hist[std::size_t(b) * buckets + c], sum);
-  par.run(blocks, kBlockGrain, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      int* h = &hist[std::size_t(b) * buckets];
-      for (int k = b * per, end = std::min(n, (b + 1) * per); k < end; ++k) place(k, h[key(k)]++);
-    }
+  par.run_blocks(n, per, [&](int b, int begin, int end) {
+    int* h = &hist[std::size_t(b) * buckets];
+    for (int k = begin; k < end; ++k) place(k, h[key(k)]++);
   });
 }
 

@@ -93,14 +93,25 @@ class Parallel {
     run(blocks, std::max(1, grain / kLanes), [&](int b0, int b1) { kernel(b0 * kLanes, std::min(n, b1 * kLanes)); });
   }
 
+  /// How many fixed blocks of `block` items cover [0, n).
+  static int blocks_of(int n, int block) { return (n + block - 1) / block; }
+
+  /// Runs each(b, begin, end) for every fixed block b = [begin, end) of `block` items of
+  /// [0, n), any block on any thread: per-block results combined in block order give the same
+  /// bits on any thread count.
+  template <class Each>
+  void run_blocks(int n, int block, const Each& each) const {
+    run(blocks_of(n, block), kBlockGrain, [&](int b0, int b1) {
+      for (int b = b0; b < b1; ++b) each(b, b * block, std::min(n, (b + 1) * block));
+    });
+  }
+
   /// Sums partial(begin, end, out[K]) over fixed blocks of `block` items, in block order.
   template <int K, class Partial>
   void sum(int n, int block, const Partial& partial, double out[K]) const {
-    const int blocks = (n + block - 1) / block;
+    const int blocks = blocks_of(n, block);
     std::vector<double> parts(K * std::size_t(blocks), 0.0);
-    run(blocks, kBlockGrain, [&](int b0, int b1) {
-      for (int b = b0; b < b1; ++b) partial(b * block, std::min(n, (b + 1) * block), &parts[K * std::size_t(b)]);
-    });
+    run_blocks(n, block, [&](int b, int begin, int end) { partial(begin, end, &parts[K * std::size_t(b)]); });
     std::fill(out, out + K, 0.0);
     for (int b = 0; b < blocks; ++b)
       for (int d = 0; d < K; ++d) out[d] += parts[K * std::size_t(b) + d];
