@@ -19,6 +19,9 @@ constexpr std::size_t kHugePage = std::size_t(2) << 20;
 /// Allocation of `bytes` bytes, 64-byte aligned (huge-page aligned and advised when large).
 void* allocate_aligned(std::size_t bytes);
 void free_aligned(void* p, std::size_t bytes);
+/// Faults in the pages of [begin, end) by writing a zero byte to each: for room that holds no
+/// element yet (its content is left to whatever constructs the elements there).
+void touch_pages(void* begin, void* end);
 
 template <class T>
 struct AlignedAllocator {
@@ -73,8 +76,9 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     const std::size_t n = this->size();
     if (n < warmed_ && warmed_ <= this->capacity()) return;
     warmed_ = std::min(this->capacity(), n + this->capacity() / 8);
-    this->resize(warmed_);  // value-initializes, touching each page
-    this->resize(n);
+    // A write a page, not a value-initialization of every element of the room: the elements are
+    // initialized when growth constructs them.
+    touch_pages(this->data() + n, this->data() + warmed_);
   }
 
  private:

@@ -76,16 +76,17 @@ void FastSimulator::collect_events() {
   by_id_.resize(std::size_t(n), 0);  // all 0 between passes
   auto each_nonzero = [](const std::uint8_t* bytes, int begin, int end, auto&& f) {
     for (int k = begin; k < end;) {
-      if (k + 8 <= end) {  // most decisions are 0: skip them eight at a time
-        std::uint64_t word;
-        std::memcpy(&word, bytes + k, 8);
-        if (word == 0) {
-          k += 8;
+      if (k + 32 <= end) {  // most decisions are 0: skip them 32 at a time
+        std::uint64_t w[4];
+        std::memcpy(w, bytes + k, sizeof w);
+        if ((w[0] | w[1] | w[2] | w[3]) == 0) {
+          k += 32;
           continue;
         }
       }
-      if (bytes[k]) f(k);
-      ++k;
+      const int last = std::min(end, k + 32);
+      for (; k < last; ++k)
+        if (bytes[k]) f(k);
     }
   };
   par_.run_blocks(n, kBlock, [&](int, int begin, int end) {

@@ -4,10 +4,12 @@
 // other gives (serial_events.h); the wide rows (wide.h) add lane by lane as scalars do; the
 // arrays keep their room when copied; vectorized kernels run in chunks aligned to lanes
 // (parallel.h).
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "fast/fast_sim.h"
 #include "fast/layout.h"
@@ -92,6 +94,36 @@ TEST(Array, SmallArraysStartOnALineLargeOnesOnAHugePage) {
   EXPECT_EQ(offset(large.data(), fast::kHugePage), 0u);
   for (int k = 0; k < 1000; ++k) ASSERT_EQ(large[k].x, float(k));
 }
+// touch_pages writes one byte in every 4 KiB page of [begin, end) and nothing outside it: a
+// write past `end` would corrupt the element after the warmed room, a skipped page would leave
+// a fault inside a step. Catches an off-by-one at either end and a stride other than the page.
+TEST(Array, TouchPagesWritesEveryPageOfTheRangeAndNothingElse) {
+  constexpr std::size_t kPage = 4096;
+  std::vector<unsigned char> buffer(8 * kPage, 0xff);
+  const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(buffer.data());
+  unsigned char* page0 = buffer.data() + ((base + kPage - 1) / kPage * kPage - base);  // first boundary
+  for (std::size_t from : {std::size_t(0), std::size_t(1), kPage - 1}) {
+    for (std::size_t length : {std::size_t(0), std::size_t(1), kPage, 3 * kPage + 5}) {
+      std::fill(buffer.begin(), buffer.end(), 0xff);
+      unsigned char* begin = page0 + from;
+      fast::touch_pages(begin, begin + length);
+      for (unsigned char* p = buffer.data(); p < buffer.data() + buffer.size(); ++p) {
+        const bool inside = p >= begin && p < begin + length;
+        if (!inside) {
+          ASSERT_EQ(*p, 0xff) << "written outside: from " << from << " length " << length;
+        }
+      }
+      // Each page the range overlaps has a written byte inside the range.
+      for (unsigned char* page = page0; page < begin + length; page += kPage) {
+        unsigned char* lo = std::max(page, begin);
+        unsigned char* hi = std::min(page + kPage, begin + length);
+        if (lo >= hi) continue;
+        EXPECT_NE(std::find(lo, hi, 0), hi) << "page not touched: from " << from << " length " << length;
+      }
+    }
+  }
+}
+
 // A vectorized kernel's chunks start on lane boundaries, on any thread count, and cover the
 // range once: so each item is computed by the same code path however the range is split.
 TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
