@@ -180,22 +180,34 @@ def print_calibration(n, entry):
 
 DEFAULT_C = KAPPA_H_REF  # the default viscosity chosen by the calibration (D18)
 WOODY = ["--mesh", os.path.join(ROOT, "tests", "data", "woody.obj")]
-# (label, input options, kappa, substep levels, the finest level run even when converged).
-# Levels start where symplectic Euler with c is stable (h kappa <= 2 c, D17).
+# (label, input options, kappa, substep levels, the finest level run even when converged, the
+# relative move below which a statistic counts as settled whatever its spread).
+# Levels start where symplectic Euler with c is stable (h kappa <= 2 c, D17). The section-2
+# references (N = 32-128, woody) follow the rule of issue 12 alone: every statistic's seed mean
+# moves by less than its seed spread. N = 256 is a reference for the error chart only, and its
+# seeds agree to 0.1-0.4 %, 25-100x below the 10 % the chart asks of a method: there a compared
+# statistic (ERROR_STATS) also counts as settled when it moves by less than 1 %, which for a
+# step converging at first order (each doubling halves the move) bounds the level's own error
+# at about that move (docs/DECISIONS.md D32).
 CONVERGE_CASES = [
-    ("N32_k1e4", ["--grid", 32], 1e4, [1, 2, 4, 8, 16, 32, 64, 128], 32),
-    ("N64_k1e4", ["--grid", 64], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256], 32),
-    ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256),
-    ("N32_k1e5", ["--grid", 32], 1e5, [8, 16, 32, 64, 128, 256], 64),
-    ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128, 256, 512], 64),
-    ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128, 256, 512], 64),
-    ("N256_k1e4", ["--grid", 256], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256),
-    ("woody_k1e4", WOODY, 1e4, [1, 2, 4, 8, 16, 32, 64], 32),
+    ("N32_k1e4", ["--grid", 32], 1e4, [1, 2, 4, 8, 16, 32, 64, 128], 32, 0.0),
+    ("N64_k1e4", ["--grid", 64], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256], 32, 0.0),
+    ("N128_k1e4", ["--grid", 128], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 256, 0.0),
+    ("N32_k1e5", ["--grid", 32], 1e5, [8, 16, 32, 64, 128, 256], 64, 0.0),
+    ("N64_k1e5", ["--grid", 64], 1e5, [8, 16, 32, 64, 128, 256, 512], 64, 0.0),
+    ("N128_k1e5", ["--grid", 128], 1e5, [8, 16, 32, 64, 128, 256, 512], 64, 0.0),
+    ("N256_k1e4", ["--grid", 256], 1e4, [1, 2, 4, 8, 16, 32, 64, 128, 256, 512], 64, 0.01),
+    ("woody_k1e4", WOODY, 1e4, [1, 2, 4, 8, 16, 32, 64], 32, 0.0),
 ]
 
 
-def moved_within_spread(a, b):
-    """Every statistic's seed mean moved by less than its seed spread from level a to level b."""
+def moved_within_spread(a, b, floor=0.0):
+    """Every statistic's seed mean moved by less than its seed spread from level a to level b;
+    with a floor, each compared statistic (ERROR_STATS) by less than its spread or that fraction
+    of its mean."""
+    if floor > 0:
+        return all(abs(b[s]["mean"] - a[s]["mean"]) < max(a[s]["sd"] or 0, b[s]["sd"] or 0, floor * abs(a[s]["mean"]))
+                   for s in ERROR_STATS)
     return all(abs(b[s]["mean"] - a[s]["mean"]) < max(a[s]["sd"], b[s]["sd"]) for s in STATS)
 
 
@@ -203,8 +215,8 @@ def stage_converge(runner, quick, only=None):
     seeds = range(1, 4 if quick else 9)
     cases = CONVERGE_CASES[:1] if quick else [c for c in CONVERGE_CASES if not only or c[0] in only]
     result = {"viscosity": DEFAULT_C, "seeds": len(seeds), "cases": {}}
-    for label, mesh, kappa, levels, finest in cases:
-        entry = {"kappa": kappa, "levels": {}, "converged_at": None}
+    for label, mesh, kappa, levels, finest, floor in cases:
+        entry = {"kappa": kappa, "levels": {}, "converged_at": None, "move_floor": floor}
         prev = None
         for S in levels:
             try:
@@ -218,7 +230,7 @@ def stage_converge(runner, quick, only=None):
                 f"{k}={cur[k]['mean']:.4g}±{cur[k]['sd'] or 0:.2g}" for k in STATS if cur[k]["mean"] is not None),
                 flush=True)
             if entry["converged_at"] is None and prev and not (cur["failed"] or prev["failed"]) \
-                    and moved_within_spread(prev, cur):
+                    and moved_within_spread(prev, cur, floor):
                 entry["converged_at"] = S
             if entry["converged_at"] is not None and S >= finest:
                 break
@@ -613,6 +625,32 @@ def table_cheapest(data):
     return "\n".join(lines)
 
 
+def table_convergence(data):
+    """Per case, each level's seed means (± spread) and their move from the level before."""
+    lines = []
+    for label, case in data.get("converge", {}).get("cases", {}).items():
+        floor = case.get("move_floor", 0.0)
+        rule = "every statistic's mean moves by less than its seed spread" if not floor else \
+            f"each compared statistic's mean moves by less than its seed spread or {floor:.0%}"
+        lines += [f"\n**{label}**, kappa {case['kappa']:g}: converged at S = {case['converged_at']} ({rule}); "
+                  "seed mean ± spread, in brackets the move from the level before\n",
+                  "| S | failed | " + " | ".join(STATS) + " |", "|---" * (len(STATS) + 2) + "|"]
+        prev = None
+        for S in sorted(case["levels"], key=int):
+            level = case["levels"][S]
+            cells = []
+            for k in STATS:
+                m, sd = level[k]["mean"], level[k]["sd"] or 0
+                if m is None:
+                    cells.append("-")
+                    continue
+                move = f" ({m / prev[k]['mean'] - 1:+.1%})" if prev and prev[k]["mean"] else ""
+                cells.append(f"{m:.4g} ± {sd:.2g}{move}")
+            lines.append(f"| {S} | {level['failed']} | " + " | ".join(cells) + " |")
+            prev = level
+    return "\n".join(lines)
+
+
 def table_calibration(data):
     lines = []
     for key, e in data.get("calibrate", {}).get("sizes", {}).items():
@@ -679,6 +717,7 @@ def stage_report(_runner, _quick):
     with open(os.path.join(OUT, "tables.md"), "w") as f:
         f.write("# Tables of the crumple study (generated by scripts/crumple_study.py report)\n")
         f.write("\n## Calibration of the viscosity\n" + table_calibration(data) + "\n")
+        f.write("\n## Convergence of the damped model in the step\n" + table_convergence(data) + "\n")
         f.write("\n## Error against the converged crumple\n" + table_pareto(data) + "\n")
         f.write("\n## The cheapest configuration within 10 % of converged\n" + table_cheapest(data) + "\n")
         f.write("\n## The fast backend against the reference, same methods and seeds (seed mean ± spread)\n"

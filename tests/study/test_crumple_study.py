@@ -50,5 +50,29 @@ class TimingOfACase(unittest.TestCase):
         self.assertEqual(crumple_study.pareto_points(data, "N64_k1e5")[0][3], 150.0)
 
 
+
+class ConvergenceRule(unittest.TestCase):
+    """The rule that ends a converge case: every mean moves by less than its seed spread; with a
+    move floor (N = 256), each compared statistic by less than its spread or the floor. Catches a
+    floor that leaks into the strict cases, one that also admits moves above it, and the
+    uncompared final kinetic energy blocking a floored case."""
+
+    @staticmethod
+    def level(**moves):
+        out = {s: {"mean": 100.0 * (1 + moves.get(s, 0.0)), "sd": 0.1} for s in crumple_study.STATS}
+        return out
+
+    def test_strict_rule_wants_moves_below_the_spread(self):
+        a = self.level()
+        self.assertTrue(crumple_study.moved_within_spread(a, self.level(splits=0.0005)))
+        self.assertFalse(crumple_study.moved_within_spread(a, self.level(splits=0.005)))
+        self.assertFalse(crumple_study.moved_within_spread(a, self.level(kinetic_end=0.005)))
+
+    def test_floor_admits_small_moves_of_the_compared_statistics_only(self):
+        a = self.level()
+        self.assertTrue(crumple_study.moved_within_spread(a, self.level(splits=0.005, vertices=-0.009), 0.01))
+        self.assertFalse(crumple_study.moved_within_spread(a, self.level(vertices=0.012), 0.01))
+        self.assertTrue(crumple_study.moved_within_spread(a, self.level(kinetic_end=0.1), 0.01))
+
 if __name__ == "__main__":
     unittest.main()
