@@ -4,6 +4,7 @@
 // is skipped when an earlier one of the pass changed one of its triangles).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -48,7 +49,10 @@ class TriangleStamps {
   /// Marks triangle t (-1: none) changed by this pass (serial: the pre-passes and scans).
   void mark(int t) {
     if (t < 0) return;
-    if (t >= int(stamp_.size())) stamp_.resize(std::size_t(t) + 1, 0);
+    // A split marks the slots it took at the end of the arrays, one or two at a time: growing
+    // by an eighth at once keeps the growth's fill off the per-split path (a stamp of 0 is an
+    // untouched triangle, so slots past the mesh's are harmless).
+    if (t >= int(stamp_.size())) stamp_.resize(std::max(std::size_t(t) + 1, stamp_.size() + stamp_.size() / 8), 0);
     if (stamp_[t] != pass_) changed_.push_back(t);
     stamp_[t] = pass_;
   }
