@@ -309,7 +309,10 @@ def errors(summ, ref):
     return {"per_stat": err, "max": max(err.values()), "noise": noise}
 
 
-def stage_pareto(runner, quick, only=None, fast_only=False):
+def stage_pareto(runner, quick, only=None, fast_only=False, methods=None):
+    """Each method's error against its case's reference. With `methods`, only those run; the
+    others enter from the cache where all their seeds are in it (their errors recomputed
+    against the current reference), so that a case's entry keeps every method run so far."""
     seeds = range(1, 4 if quick else 9)
     result = {}
     for label, (mesh, kappa) in PARETO_CASES.items():
@@ -329,8 +332,9 @@ def stage_pareto(runner, quick, only=None, fast_only=False):
             for S in settings:
                 lines = [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa]
                          + step_options(S, opts) + opts + mesh for s in seeds]
-                if backend == "reference" and fast_only and not runner.cached(lines):
-                    continue  # --fast-only: a reference method only where its runs are all cached
+                skipped = (methods and name not in methods) or (backend == "reference" and fast_only)
+                if skipped and not runner.cached(lines):
+                    continue  # --fast-only, --methods: the others only where their runs are all cached
                 try:
                     summ = summary(runner.run(lines))
                 except LookupError:  # --cached-only: what was run
@@ -736,7 +740,8 @@ def main(argv=None):
     p.add_argument("--cached-only", action="store_true", help="use only cached runs (converge: stop at the "
                    "last level run in full)")
     p.add_argument("--fast-only", action="store_true", help="pareto: only the methods of the fast backend")
-    p.add_argument("--methods", nargs="*", help="timing: only these methods (the others keep their timings)")
+    p.add_argument("--methods", nargs="*", help="timing: only these methods (the others keep their timings); "
+                   "pareto: only these run (the others where cached)")
     p.add_argument("--cases", nargs="*", help="converge, pareto: only these cases (labels); timing: N64, N64_k1e5 ...")
     p.add_argument("--sizes", nargs="*", type=int, help="calibrate: grid sizes N")
     p.add_argument("--substeps", type=int, default=64, help="calibrate: substeps of the viscous runs")
@@ -748,7 +753,7 @@ def main(argv=None):
     if not os.path.exists(crumple_stats.EXE):
         sys.exit(f"crumple_study: no crumple at {crumple_stats.EXE} (set CRUMPLE_EXE)")
     stages = {"converge": lambda: stage_converge(runner, a.quick, a.cases),
-              "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only),
+              "pareto": lambda: stage_pareto(runner, a.quick, a.cases, a.fast_only, a.methods),
               "timing": lambda: stage_timing(runner, a.quick, a.cases, a.methods),
               "framerate": lambda: stage_framerate(runner, a.quick, a.cases),
               "backends": lambda: stage_backends(runner, a.quick),

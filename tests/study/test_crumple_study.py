@@ -74,5 +74,38 @@ class ConvergenceRule(unittest.TestCase):
         self.assertFalse(crumple_study.moved_within_spread(a, self.level(vertices=0.012), 0.01))
         self.assertTrue(crumple_study.moved_within_spread(a, self.level(kinetic_end=0.1), 0.01))
 
+
+class ParetoMethods(unittest.TestCase):
+    """pareto --methods runs only the named methods and keeps every other method whose runs are
+    all cached (recomputed against the current reference). Catches a filter that runs the others
+    anyway (hours of runs at N = 256) or that drops their cached rows from the case."""
+
+    class FakeRunner:
+        def __init__(self, cached_methods):
+            self.cached_methods, self.ran = cached_methods, []
+
+        @staticmethod
+        def method_of(lines):
+            return " ".join(str(a) for a in lines[0])
+
+        def cached(self, lines):
+            return any(m in self.method_of(lines) for m in self.cached_methods)
+
+        def run(self, lines):
+            if not self.cached(lines):
+                self.ran.append(self.method_of(lines))
+            return [{"exit": 0, **{s: 1.0 + 0.01 * k for s in crumple_study.STATS}} for k in range(len(lines))]
+
+    def test_only_named_methods_run_and_cached_ones_stay(self):
+        ref = {s: {"mean": 1.0, "sd": 0.01} for s in crumple_study.STATS}
+        runner = self.FakeRunner(cached_methods=["--integrator approx --grid"])  # the paper's step
+        with mock.patch.object(crumple_study, "reference_level", return_value=(64, ref)):
+            result = crumple_study.stage_pareto(runner, False, ["N64_k1e4"], methods=["xpbd"])
+        rows = result["N64_k1e4"]["methods"]
+        self.assertTrue(runner.ran)
+        self.assertTrue(all("--integrator xpbd" in r for r in runner.ran), runner.ran)
+        self.assertEqual({r["method"] for r in rows.values()}, {"xpbd", "paper"})
+        self.assertAlmostEqual(rows["paper/S1"]["error"]["max"], 0.035)
+
 if __name__ == "__main__":
     unittest.main()
