@@ -149,22 +149,23 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   // [Eq 3] masses of N = {i, j, l, r}; [Eq 4] the new vertex's momentum.
   const Float4 Xi = V.rest[i], Xj = V.rest[j];
   const D3 Xn{0.5 * (double(Xi.x) + Xj.x), 0.5 * (double(Xi.y) + Xj.y), 0.5 * (double(Xi.z) + Xj.z)};
-  auto rest_dist = [&](int k) {
-    const Float4 Xk = V.rest[k];
-    return norm({Xk.x - Xn.x, Xk.y - Xn.y, Xk.z - Xn.z});
-  };
   SplitRecord rec;
   rec.k = {i, j, l, r};
   rec.l0 = l0;
+  std::array<double, 4> dist{};  // |X_k - X_n| of each k in N
   double dsum = 0;
-  for (int k : rec.k)
-    if (k >= 0) dsum += rest_dist(k);
+  for (int q = 0; q < 4; ++q) {
+    if (rec.k[q] < 0) continue;
+    const Float4 Xk = V.rest[rec.k[q]];
+    dist[q] = norm({Xk.x - Xn.x, Xk.y - Xn.y, Xk.z - Xn.z});
+    dsum += dist[q];
+  }
   double mn = 0;
   D3 pn;
   for (int q = 0; q < 4; ++q) {
     const int k = rec.k[q];
     if (k < 0) continue;
-    rec.delta[q] = rest_dist(k) / dsum;
+    rec.delta[q] = dist[q] / dsum;
     const float m_new = float(0.5 * (std::pow(rec.delta[q], 1.0 / params_.varphi) + 1.0) * V.mass(k));
     rec.dm[q] = double(V.mass(k) - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
     V.set_mass(k, m_new);
@@ -183,8 +184,7 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   rec.n = n;
   rec.e = plan.edges;
   const float lt_f = float(lt);
-  const std::array<float, 4> rest{float(l0 / 2), float(l0 / 2), l >= 0 ? float(rest_dist(l)) : 0.0f,
-                                  r >= 0 ? float(rest_dist(r)) : 0.0f};
+  const std::array<float, 4> rest{float(l0 / 2), float(l0 / 2), float(dist[2]), float(dist[3])};
   return relink_split(m, plan, rec, lt_f, rest);
 }
 
@@ -255,6 +255,9 @@ Freed FastSimulator::restore_edge_local(int e) {
   Face faces[2];
   if (s.t[0] >= 0) faces[0] = moved_corner(m.T, s.t[0], n, j, e, side_from(m.T, s.t[1], j));
   if (s.t[2] >= 0) faces[1] = moved_corner(m.T, s.t[2], n, i, e, side_from(m.T, s.t[3], i));
+  // n goes with its four triangles and edges: its lists are dropped whole here, so that the
+  // detaches and releases below erase their entries only at the other corners and ends.
+  V.spring_list[n].count = V.tri_list[n].count = 0;
   for (int t : s.t)
     if (t >= 0) m.detach(t);
   Freed freed;
