@@ -144,6 +144,32 @@ TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
   }
 }
 
+// run_blocks hands each fixed block b exactly [b * block, min(n, (b + 1) * block)), once, on any
+// thread count: what makes the per-block sums of the totals and the layout's histograms
+// independent of the threads. Catches a last block cut short or run past n, and a block index
+// that does not match its range.
+TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
+  for (int threads : {1, 2, 4}) {
+    const fast::Parallel par(threads);
+    for (int n : {0, 1, 7, 8, 9, 8193, 100003}) {
+      const int block = n < 100 ? 8 : 8192;
+      const int blocks = fast::Parallel::blocks_of(n, block);
+      std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n)), calls(static_cast<std::size_t>(blocks));
+      std::atomic<int> wrong{0};
+      par.run_blocks(n, block, [&](int b, int begin, int end) {
+        if (b < 0 || b >= blocks || begin != b * block || end != std::min(n, (b + 1) * block)) ++wrong;
+        else ++calls[std::size_t(b)];
+        for (int k = begin; k < end && k < n; ++k) ++seen[std::size_t(k)];
+      });
+      EXPECT_EQ(wrong.load(), 0) << "threads " << threads << ", n " << n;
+      for (auto& c : calls) EXPECT_EQ(c.load(), 1) << "threads " << threads << ", n " << n;
+      int once = 0;
+      for (auto& v : seen) once += v.load() == 1;
+      EXPECT_EQ(once, n) << "threads " << threads << ", n " << n;
+    }
+  }
+}
+
 // The edge pass runs eight edges in AVX lanes (lanes8.h), the last block of a range padded with
 // its last edge: an edge's record must be the same bits whichever lane and chunk computed it,
 // and a range must write no record outside itself. Ranges split at every offset and run last
