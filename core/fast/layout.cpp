@@ -36,8 +36,9 @@ std::uint64_t spread3(std::uint64_t v) {
 template <class Key, class Place>
 void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
   // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
-  const int blocks = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
-  const int per = std::max(1, (n + blocks - 1) / blocks);  // >= 1: no block of zero items
+  const int wanted = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
+  const int per = std::max(1, (n + wanted - 1) / wanted);  // >= 1: no block of zero items
+  const int blocks = Parallel::blocks_of(n, per);          // the blocks run_blocks runs
   hist.assign(std::size_t(blocks) * buckets, 0);
   par.run_blocks(n, per, [&](int b, int begin, int end) {
     int* h = &hist[std::size_t(b) * buckets];
