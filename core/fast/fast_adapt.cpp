@@ -4,9 +4,12 @@
 // with the serial result of serial_events.h), then the areas and normals renewed where
 // triangles changed. One event's edits are in fast_edits.cpp.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstring>
+
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+#include <immintrin.h>
+#endif
 
 #include "fast/event_prefetch.h"
 #include "fast/fast_sim.h"
@@ -21,6 +24,38 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 
 constexpr int kTestGrain = 4096;  ///< adapt_test streams cheaply over every edge: large chunks
 constexpr int kRenewGrain = 512;  ///< an area or a few normals per triangle: less than an event
+
+constexpr int kSkip = 64;  ///< decisions tested at once: one line
+
+/// Whether the kSkip bytes at p are all 0.
+inline bool all_zero(const std::uint8_t* p) {
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+  const __m256i lo = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+  const __m256i hi = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32));
+  const __m256i any = _mm256_or_si256(lo, hi);
+  return _mm256_testz_si256(any, any);
+#else
+  std::uint64_t w[kSkip / 8];
+  std::memcpy(w, p, sizeof w);
+  std::uint64_t any = 0;
+  for (std::uint64_t x : w) any |= x;
+  return any == 0;
+#endif
+}
+
+/// Calls f(k) for each nonzero byte k of bytes[begin, end), in order. Nearly all decisions are
+/// 0 (a few events among hundreds of thousands of edges): a line of them is tested at once.
+template <class F>
+void for_each_nonzero(const std::uint8_t* bytes, int begin, int end, F&& f) {
+  for (int k = begin; k < end;) {
+    if (k + kSkip <= end && all_zero(bytes + k)) {
+      k += kSkip;
+      continue;
+    }
+    for (const int last = std::min(end, k + kSkip); k < last; ++k)
+      if (bytes[k]) f(k);
+  }
+}
 
 }  // namespace
 
@@ -74,29 +109,14 @@ void FastSimulator::collect_events() {
   constexpr int kBlock = 16384;  // ids per block: short per-block lists, and blocks for every thread on a large mesh
   const int blocks = Parallel::blocks_of(n, kBlock);
   by_id_.resize(std::size_t(n), 0);  // all 0 between passes
-  auto each_nonzero = [](const std::uint8_t* bytes, int begin, int end, auto&& f) {
-    for (int k = begin; k < end;) {
-      if (k + 32 <= end) {  // most decisions are 0: skip them 32 at a time
-        std::uint64_t w[4];
-        std::memcpy(w, bytes + k, sizeof w);
-        if ((w[0] | w[1] | w[2] | w[3]) == 0) {
-          k += 32;
-          continue;
-        }
-      }
-      const int last = std::min(end, k + 32);
-      for (; k < last; ++k)
-        if (bytes[k]) f(k);
-    }
-  };
   par_.run_blocks(n, kBlock, [&](int, int begin, int end) {
-    each_nonzero(decisions_.data(), begin, end, [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
+    for_each_nonzero(decisions_.data(), begin, end, [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
   });
   std::vector<std::vector<int>>& found = s.found;  // per block and kind: slots in id order
   found.resize(2 * std::size_t(blocks));
   par_.run_blocks(n, kBlock, [&](int b, int begin, int end) {
     found[2 * b].clear(), found[2 * b + 1].clear();
-    each_nonzero(by_id_.data(), begin, end, [&](int id) {
+    for_each_nonzero(by_id_.data(), begin, end, [&](int id) {
       found[2 * b + by_id_[id] - 1].push_back(topo_.E.phys[id]);
       by_id_[id] = 0;
     });
@@ -111,21 +131,15 @@ void FastSimulator::collect_events() {
 void FastSimulator::renew_normals() {
   // Bring the areas and normals computed for the decisions up to date where the topology
   // changed, so the next step need not recompute them all: the changed triangles' areas (a dead
-  // one gets the zero it has), then the normal of each of their corners, once, by whichever
-  // thread claims it first (each normal is a function of the areas alone, so who computes it
-  // and in which order changes nothing).
+  // one gets the zero it has), then the normal of each corner of a live changed triangle, once
+  // (each normal is a function of the areas alone, so the order changes nothing).
   const std::vector<int>& changed = stamps_.changed();
-  const std::uint64_t pass = stamps_.pass();
   const float unit = length_unit();
-  vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
-  // Both loops prefetch what the changed triangle kNear on reads: its corners' positions, then
-  // its corners' triangle lists (the triangle lines themselves, kFar on): the changed triangles
-  // are scattered, so each one's lines miss. Not the areas those lists name: prefetching them too
-  // made the renewal slower (docs/PERFORMANCE.md).
   const Vertices& V = topo_.V;
   const Triangles& T = topo_.T;
   Float4* area = topo_.T.area.data();
-  Float4* normals = topo_.V.nr.data();
+  // Prefetched kNear on: the changed triangle's corners' positions (the triangle lines themselves
+  // kFar on): the changed triangles are scattered, so each one's lines miss.
   par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
@@ -134,21 +148,32 @@ void FastSimulator::renew_normals() {
       triangle_areas(topo_, unit, area, changed[k], changed[k] + 1);
     }
   });
-  par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
+  collect_renewed_vertices();
+  // Prefetched kNear on: the vertex's list head and its list (not the areas the list names:
+  // prefetching them too made the renewal slower, docs/PERFORMANCE.md).
+  const std::vector<int>& verts = renewed_;
+  Float4* normals = topo_.V.nr.data();
+  par_.run(int(verts.size()), kRenewGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
-      if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.tri_list[v]), prefetch_read(topo_.tris_of(v));
-      const int t = changed[k];
-      if (!T.alive[t]) continue;
-      for (int v : T.corners(t)) {
-        std::atomic_ref<std::uint64_t> mark(vertex_stamp_[v]);
-        std::uint64_t seen = mark.load(std::memory_order_relaxed);
-        if (seen != pass && mark.compare_exchange_strong(seen, pass, std::memory_order_relaxed))
-          vertex_normals(topo_, normals, v, v + 1);
-      }
+      if (k + kNear < e) prefetch_read(&V.tri_list[verts[k + kNear]]), prefetch_read(topo_.tris_of(verts[k + kNear]));
+      vertex_normals(topo_, normals, verts[k], verts[k] + 1);
     }
   });
   normals_valid_ = true;
+}
+
+// The corners of the live changed triangles, each once (serial: a few tests a triangle, where a
+// parallel claim would cost an atomic exchange a corner).
+void FastSimulator::collect_renewed_vertices() {
+  const std::uint64_t pass = stamps_.pass();
+  const Triangles& T = topo_.T;
+  vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
+  renewed_.clear();
+  for (int t : stamps_.changed()) {
+    if (!T.alive[t]) continue;
+    for (int v : T.corners(t))
+      if (vertex_stamp_[v] != pass) vertex_stamp_[v] = pass, renewed_.push_back(v);
+  }
 }
 
 StepEvents FastSimulator::adapt() {

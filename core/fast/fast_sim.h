@@ -145,6 +145,7 @@ class FastSimulator final : public Simulator {
   friend struct SerialEvents;
   void collect_events();
   void renew_normals();
+  void collect_renewed_vertices();
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
   double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
   // One event's edits (fast_edits.cpp).
@@ -171,6 +172,7 @@ class FastSimulator final : public Simulator {
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
   Array<std::uint8_t> by_id_;             ///< the nonzero decisions per logical id (0 between passes)
   Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
+  std::vector<int> renewed_;              ///< the vertices whose normals this pass renews
   /// collect_events' temporaries, kept from pass to pass so that a pass allocates (and faults
   /// in) no memory.
   struct EventLists {

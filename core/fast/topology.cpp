@@ -21,8 +21,10 @@ void erase_slot(std::int32_t* list, std::int32_t* parallel, std::uint16_t& count
   int k = 0;
   while (k < count && list[k] != entry) ++k;
   if (k == count) return;
-  std::copy(list + k + 1, list + count, list + k);
-  std::copy(parallel + k + 1, parallel + count, parallel + k);
+  // The entries after k move down one, carried from the end in one loop over both lists: the
+  // lists hold a few entries, where the two library moves a plain shift compiles to cost more.
+  std::int32_t carry = list[count - 1], carry_parallel = parallel[count - 1];
+  for (int q = count - 2; q >= k; --q) std::swap(carry, list[q]), std::swap(carry_parallel, parallel[q]);
   --count;
 }
 }  // namespace
