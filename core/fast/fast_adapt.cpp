@@ -169,7 +169,11 @@ void FastSimulator::collect_renewed_vertices() {
   const Triangles& T = topo_.T;
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
   renewed_.clear();
-  for (int t : stamps_.changed()) {
+  const std::vector<int>& changed = stamps_.changed();
+  for (std::size_t k = 0; k < changed.size(); ++k) {
+    if (k + kNear < changed.size())  // the face is cached from the areas just computed; its corners' stamps are not
+      for (int v : T.corners(changed[k + kNear])) prefetch(&vertex_stamp_[v]);
+    const int t = changed[k];
     if (!T.alive[t]) continue;
     for (int v : T.corners(t))
       if (vertex_stamp_[v] != pass) vertex_stamp_[v] = pass, renewed_.push_back(v);

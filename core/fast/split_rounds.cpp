@@ -12,9 +12,7 @@ constexpr int kRoundGrain = 64;       ///< smaller rounds run inline: too few sp
 constexpr int kCandidateGrain = 256;  ///< a candidate read misses several lines: smaller chunks repay
 }  // namespace
 
-void SplitRounds::reserve(std::size_t vertices) {
-  for (Array<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->reserve_warm(vertices);
-}
+void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices); }
 
 int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const int rounds = plan(sim, splits, stamps);
@@ -28,7 +26,7 @@ int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, Trian
 // that array, the stamps and the rounds. Returns the number of rounds.
 int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
-  for (Array<int>* a : {&round_last_, &spring_adds_, &tri_adds_}) a->resize(std::size_t(m.V.size()), 0);
+  tally_.resize(std::size_t(m.V.size()), Tally{});
   plans_.clear(), round_of_.clear(), involved_.clear();
   candidates_.resize(splits.size());
   sim.par_.run(int(splits.size()), kCandidateGrain, [&](int b, int e) {
@@ -44,7 +42,7 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
       for (int t : f.tris)
         if (const std::uint64_t* line = stamps.line_of(t)) prefetch(line);
       for (int v : f.ends)
-        if (v >= 0) prefetch(&round_last_[v]);
+        if (v >= 0) prefetch(&tally_[v]);
     }
     const SplitCandidate& c = candidates_[k];
     if (stamps.touched(c.tris[0]) || stamps.touched(c.tris[1])) continue;
@@ -52,12 +50,19 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
     if (p.e < 0) continue;
     int round = 0;
     for (int v : c.ends)
-      if (v >= 0) round = std::max(round, round_last_[v]);
+      if (v >= 0) round = std::max(round, tally_[v].round_last);
     ++round;
-    for (int v : c.ends) {
+    // Room in the adjacency lists for every append (make_room): a split adds one spring at each
+    // of i, j, l, r and, net, one triangle at l and at r (i and j lose their two triangles
+    // before they gain two).
+    for (int q = 0; q < 4; ++q) {
+      const int v = c.ends[q];
       if (v < 0) continue;
-      if (round_last_[v] == 0) involved_.push_back(v);  // its first split of the pass
-      round_last_[v] = round;
+      Tally& t = tally_[v];
+      if (t.round_last == 0) involved_.push_back(v);  // its first split of the pass
+      t.round_last = round;
+      ++t.spring_adds;
+      t.tri_adds += q >= 2;
     }
     rounds = std::max(rounds, round);
     for (int t : {c.tris[0], c.tris[1], p.tris[0], p.tris[1]}) stamps.mark(t);
@@ -67,20 +72,20 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
   return rounds;
 }
 
-// Room in the adjacency lists for every append, so that no block moves while rounds run: a
-// split adds one spring at each of i, j, l, r and, net, one triangle at l and at r (i and j
-// lose their two triangles before they gain two).
+// Room in the adjacency lists for every append the plan counted, so that no block moves while
+// rounds run (serial: a moved block is appended at the list arrays' end).
 void SplitRounds::make_room(FastSimulator& sim) {
   Topology& m = sim.topo_;
-  for (const SplitPlan& p : plans_) {
-    for (int v : p.ends)
-      if (v >= 0) ++spring_adds_[v];
-    for (int v : {p.ends[2], p.ends[3]})
-      if (v >= 0) ++tri_adds_[v];
-  }
-  for (int v : involved_) {
-    m.make_room(v, m.V.spring_list[v].count + spring_adds_[v], m.V.tri_list[v].count + tri_adds_[v]);
-    round_last_[v] = spring_adds_[v] = tri_adds_[v] = 0;
+  const std::size_t n = involved_.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kNear < n) {
+      const int w = involved_[k + kNear];
+      prefetch_read(&m.V.spring_list[w]), prefetch_read(&m.V.tri_list[w]);
+    }
+    const int v = involved_[k];
+    Tally& t = tally_[v];
+    m.make_room(v, m.V.spring_list[v].count + t.spring_adds, m.V.tri_list[v].count + t.tri_adds);
+    t = Tally{};
   }
 }
 

@@ -33,11 +33,17 @@ class SplitRounds {
   void make_room(FastSimulator& sim);
   int run_rounds(FastSimulator& sim, int rounds);
 
-  // Per vertex slot, all 0 between passes (reset for the vertices used): no pass clears or
+  /// What this pass's accepted splits do at one vertex: one record, so that the serial plan
+  /// misses one line a vertex, not one per array.
+  struct Tally {
+    int round_last = 0;   ///< round of the vertex's last split in this pass (0: none)
+    int spring_adds = 0;  ///< springs the splits of this pass add at the vertex
+    int tri_adds = 0;     ///< triangles the splits of this pass add at the vertex
+    int unused = 0;       ///< pads the record to 16 bytes: four a line, none across two
+  };
+  // Per vertex slot, all zero between passes (reset for the vertices used): no pass clears or
   // allocates an array the size of the mesh.
-  Array<int> round_last_;   ///< round of the vertex's last split in this pass (0: none)
-  Array<int> spring_adds_;  ///< springs the splits of this pass add at the vertex
-  Array<int> tri_adds_;     ///< triangles the splits of this pass add at the vertex
+  Array<Tally> tally_;
   // Per pass, kept so that a pass allocates (and faults in) no memory.
   std::vector<SplitCandidate> candidates_;   ///< per split event
   std::vector<SplitPlan> plans_;             ///< accepted splits, in event order
