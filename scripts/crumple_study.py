@@ -525,7 +525,7 @@ def chart_convergence(data, path):
             ax.errorbar([int(S) for S in ok], y, yerr=e, marker="o", ms=3, capsize=2, label=s)
         ax.axhspan(0.9, 1.1, color="0.9", zorder=0)
         ax.set_xscale("log", base=2)
-        ax.set_title(f"{label} (converged at S={case['converged_at']})", fontsize=9)
+        ax.set_title(f"{label} ({convergence_phrase(case, short=True)})", fontsize=9)
         ax.set_xlabel("substeps per 1/60 s frame")
     for row in axes:
         row[0].set_ylabel("seed mean / finest level's")
@@ -629,6 +629,16 @@ def table_cheapest(data):
     return "\n".join(lines)
 
 
+def convergence_phrase(case, short=False):
+    """Where a case converged, or, before it did, that its finest level run so far is the reference."""
+    if case["converged_at"] is not None:
+        return f"converged at S = {case['converged_at']}"
+    finest = max(case["levels"], key=int)
+    if short:
+        return f"not converged; reference S = {finest}"
+    return f"not converged by the rule yet; the reference is the finest level run, S = {finest}"
+
+
 def table_convergence(data):
     """Per case, each level's seed means (± spread) and their move from the level before."""
     lines = []
@@ -636,7 +646,7 @@ def table_convergence(data):
         floor = case.get("move_floor", 0.0)
         rule = "every statistic's mean moves by less than its seed spread" if not floor else \
             f"each compared statistic's mean moves by less than its seed spread or {floor:.0%}"
-        lines += [f"\n**{label}**, kappa {case['kappa']:g}: converged at S = {case['converged_at']} ({rule}); "
+        lines += [f"\n**{label}**, kappa {case['kappa']:g}: {convergence_phrase(case)} ({rule}); "
                   "seed mean ± spread, in brackets the move from the level before\n",
                   "| S | failed | " + " | ".join(STATS) + " |", "|---" * (len(STATS) + 2) + "|"]
         prev = None

@@ -75,6 +75,23 @@ class ConvergenceRule(unittest.TestCase):
         self.assertTrue(crumple_study.moved_within_spread(a, self.level(kinetic_end=0.1), 0.01))
 
 
+class ConvergencePhrase(unittest.TestCase):
+    """Tables and charts name the level the errors are measured against. Catches a case that has
+    not converged printed as "converged at S = None", or its reference named by the first level
+    (levels sort as strings: "64" < "8") instead of the finest one run."""
+
+    def test_unconverged_case_names_its_finest_level(self):
+        case = {"converged_at": None, "levels": {"1": {}, "8": {}, "64": {}, "16": {}}}
+        for short in (False, True):
+            phrase = crumple_study.convergence_phrase(case, short)
+            self.assertIn("not converged", phrase)
+            self.assertTrue(phrase.endswith("S = 64"), phrase)
+
+    def test_converged_case_names_where(self):
+        case = {"converged_at": 256, "levels": {"128": {}, "256": {}, "512": {}}}
+        self.assertEqual(crumple_study.convergence_phrase(case), "converged at S = 256")
+
+
 class ParetoMethods(unittest.TestCase):
     """pareto --methods runs only the named methods and keeps every other method whose runs are
     all cached (recomputed against the current reference). Catches a filter that runs the others
