@@ -602,7 +602,11 @@ def chart_pareto(data, label, path):
     ax.set_xlabel("ms per frame (mean of a 3 s crumple; fast backend 2 threads, reference backend 1)")
     ax.set_ylabel("largest relative error of a seed mean")
     machines, commits = timed_on(data, label)
-    ax.set_title(f"crumple {label}: error against the converged crumple (S = {data['pareto'][label]['reference_substeps']}),"
+    ref_s = data["pareto"][label]["reference_substeps"]
+    case = data.get("converge", {}).get("cases", {}).get(label)
+    against = f"the converged crumple (S = {ref_s})" if case and case["converged_at"] is not None \
+        else f"the finest level run (S = {ref_s}; tables.md: convergence)"
+    ax.set_title(f"crumple {label}: error against {against},"
                  f" and cost\n{' and '.join(machines)}, crumple {' and '.join(commits)}", fontsize=9)
     ax.legend(fontsize=7, loc="lower left")
     fig.tight_layout()
