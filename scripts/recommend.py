@@ -54,7 +54,10 @@ def crumple_main(a):
         return {"configuration": p[0], "ms_per_frame": p[3], "error": p[4], "fits_60fps": p[3] <= 1000 / 60,
                 "crumple_options": " ".join(opts)}
 
-    out = {"scene": "crumple", "case": label, "error_budget": a.error,
+    case = data.get("converge", {}).get("cases", {}).get(label)
+    reference = {"substeps": data["pareto"][label]["reference_substeps"],
+                 "converged": bool(case and case.get("converged_at") is not None)}
+    out = {"scene": "crumple", "case": label, "error_budget": a.error, "reference": reference,
            "recommendation": describe(ok[0]) if ok else None,
            "alternatives": [describe(p) for p in ok[1:1 + a.alternatives]],
            "machine": " and ".join(machines), "commit": " and ".join(commits)}
@@ -62,6 +65,9 @@ def crumple_main(a):
         print(json.dumps(out, indent=1))
         return 0 if ok else 1
     print(f"crumple {label}, error budget {a.error:g} (largest relative error of a statistic's seed mean)")
+    print(f"  errors against the S = {reference['substeps']} level: " + (
+        "converged by the study's rule" if reference["converged"] else
+        "the finest run so far, not converged by the study's rule (results/accuracy/crumple/tables.md)"))
     if not ok:
         best = min(points, key=lambda p: p[4])
         print(f"  none of the timed configurations meets it; the most accurate: {best[0]}, error {best[4]:.1%}, "

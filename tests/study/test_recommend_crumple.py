@@ -85,6 +85,18 @@ class Command(unittest.TestCase):
         self.assertEqual(p.returncode, 1)
         self.assertIn("most accurate: explicit/S64", p.stdout)
 
+    def test_says_whether_the_reference_converged(self):
+        # Catches a recommendation that presents errors against an unconverged level (the
+        # provisional N = 256 reference) as errors against the converged crumple.
+        p = self.run_recommend("--grid", "64", "--kappa", "1e4", "--error", "0.1")
+        self.assertIn("against the S = 256 level: the finest run so far, not converged", p.stdout)
+        STUDY["converge"] = {"cases": {"N64_k1e4": {"converged_at": 256, "levels": {"256": {}}}}}
+        try:
+            p = self.run_recommend("--grid", "64", "--kappa", "1e4", "--error", "0.1", "--json")
+        finally:
+            del STUDY["converge"]
+        self.assertEqual(json.loads(p.stdout)["reference"], {"substeps": 256, "converged": True})
+
     def test_unstudied_case_is_an_error(self):
         p = self.run_recommend("--grid", "512", "--kappa", "1e4", "--error", "0.1")
         self.assertEqual(p.returncode, 2)
