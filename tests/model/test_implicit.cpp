@@ -277,6 +277,20 @@ std::vector<int> xpbd_order(const std::string& backend, const std::vector<EdgeVi
   return order;
 }
 
+// One Gauss-Seidel pass of XPBD over the springs in the backend's order, by hand: alpha~ =
+// 1 / (kappa_e h^2) with kappa_e of [Eq 5], lambda from 0; x holds the predicted positions.
+void xpbd_pass(const std::string& backend, const Snapshot& s0, double kappa, double h, std::vector<V3>& x) {
+  for (const int id : xpbd_order(backend, s0.edges)) {
+    const EdgeView& e = s0.edges[size_t(id)];
+    const double wa = 1 / s0.mass[e.a], wb = 1 / s0.mass[e.b];
+    const double kappa_e = kappa * (s0.mass[e.a] + s0.mass[e.b]);  // [Eq 5]
+    const V3 d = x[e.a] - x[e.b];
+    const double dlambda = -(d.norm() - e.rest) / (wa + wb + 1 / (kappa_e * h * h));
+    x[e.a] += wa * dlambda * d.normalized();
+    x[e.b] -= wb * dlambda * d.normalized();
+  }
+}
+
 // XPBD with small steps (MODEL.md §3, ref_xpbd.cpp), by hand: v += h f_ext / m, x* = x + h v,
 // one Gauss-Seidel pass over the springs in the backend's order (xpbd_order) with
 // alpha~ = 1 / (kappa_e h^2) and lambda from 0, then v = (x - x_before) / h. Then momentum:
@@ -286,11 +300,7 @@ TEST_P(Integrators, XpbdProjectsEachSpringOnceInItsOrder) {
   Params p = params(Integrator::Xpbd);
   p.kappa = 3e4;
   if (!supports(p)) GTEST_SKIP() << "no XPBD on this backend";
-  auto sim = make(mesh, p);
-  sim->set_state(x0, v0);
-  const Snapshot s0 = sim->snapshot();
-  sim->step();
-  const Snapshot s = sim->snapshot();
+  const auto [f, s0, s] = one_step(p);
   const double h = p.h();
   std::vector<V3> x(x0.size()), v(x0.size());
   V3 p0 = V3::Zero(), p1 = V3::Zero();
@@ -299,15 +309,7 @@ TEST_P(Integrators, XpbdProjectsEachSpringOnceInItsOrder) {
     x[k] = v3(x0[k]) + h * v[k];
     p0 += s0.mass[k] * (v3(v0[k]) + h * V3(0, 0, -p.gravity));
   }
-  for (const int id : xpbd_order(GetParam(), s0.edges)) {
-    const EdgeView& e = s0.edges[size_t(id)];
-    const double wa = 1 / s0.mass[e.a], wb = 1 / s0.mass[e.b];
-    const double kappa_e = p.kappa * (s0.mass[e.a] + s0.mass[e.b]);  // [Eq 5]
-    const V3 d = x[e.a] - x[e.b];
-    const double dlambda = -(d.norm() - e.rest) / (wa + wb + 1 / (kappa_e * h * h));
-    x[e.a] += wa * dlambda * d.normalized();
-    x[e.b] -= wb * dlambda * d.normalized();
-  }
+  xpbd_pass(GetParam(), s0, p.kappa, h, x);
   for (size_t k = 0; k < x0.size(); ++k) {
     EXPECT_NEAR((v3(s.position[k]) - x[k]).norm(), 0, tol()) << k;
     EXPECT_NEAR((v3(s.velocity[k]) - (x[k] - v3(x0[k])) / h).norm(), 0, tol() / h) << k;
@@ -315,6 +317,44 @@ TEST_P(Integrators, XpbdProjectsEachSpringOnceInItsOrder) {
   }
   // Exact on the reference; in float each projection's m w differs from 1 by an ulp or so.
   EXPECT_LT((p1 - p0).norm(), GetParam() == "reference" ? 1e-12 : 1e-6);
+}
+
+// The viscosity on XPBD (D19): its own implicit velocity step first, solved here densely,
+// m_i v*_i = m_i v_i + h sum_e c_e (v*_j - v*_i) with c_e = c (m_i + m_j) (D17), then the XPBD
+// step by hand from v*. Catches a viscosity left out of XPBD, applied explicitly (v* from the
+// old velocities), after the projection, or with another c_e.
+TEST_P(Integrators, XpbdAppliesTheViscosityAsItsOwnImplicitStep) {
+  Params p = params(Integrator::Xpbd);
+  p.viscosity = 5;
+  p.sweeps = 400;
+  if (!supports(p)) GTEST_SKIP() << "no XPBD on this backend";
+  const auto [f, s0, s] = one_step(p);
+  const double h = p.h();
+  const int n = int(x0.size());
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  Eigen::VectorXd b(3 * n);
+  for (int k = 0; k < n; ++k) {
+    A.block<3, 3>(3 * k, 3 * k) += s0.mass[size_t(k)] * Eigen::Matrix3d::Identity();
+    b.segment<3>(3 * k) = s0.mass[size_t(k)] * v3(v0[size_t(k)]);
+  }
+  for (const EdgeView& e : s0.edges) {
+    const double w = h * p.viscosity * (s0.mass[e.a] + s0.mass[e.b]);
+    for (const auto& [i, j] : {std::pair{e.a, e.b}, std::pair{e.b, e.a}}) {
+      A.block<3, 3>(3 * i, 3 * i) += w * Eigen::Matrix3d::Identity();
+      A.block<3, 3>(3 * i, 3 * j) -= w * Eigen::Matrix3d::Identity();
+    }
+  }
+  const Eigen::VectorXd vstar = A.lu().solve(b);
+  std::vector<V3> x(x0.size());
+  for (int k = 0; k < n; ++k) x[size_t(k)] = v3(x0[size_t(k)]) + h * (vstar.segment<3>(3 * k) + h * V3(0, 0, -p.gravity));
+  xpbd_pass(GetParam(), s0, p.kappa, h, x);
+  double moved = 0;
+  for (int k = 0; k < n; ++k) moved = std::max(moved, (vstar.segment<3>(3 * k) - v3(v0[size_t(k)])).norm());
+  EXPECT_GT(moved, 1e-2);  // the viscosity changed the velocities by more than the tolerance
+  for (size_t k = 0; k < x0.size(); ++k) {
+    EXPECT_NEAR((v3(s.position[k]) - x[k]).norm(), 0, tol()) << k;
+    EXPECT_NEAR((v3(s.velocity[k]) - (x[k] - v3(x0[k])) / h).norm(), 0, tol() / h) << k;
+  }
 }
 
 // XPBD's compliance is 1 / kappa_e: as h -> 0 it converges to the same motion as symplectic
