@@ -394,7 +394,7 @@ def default_section(series, paper):
     lines = ["## The default configuration against the paper's", "",
              "`BM_Default/<backend>/<threads>/<N>` times one `Sheet::step` frame of the command's default "
              "configuration (docs/DECISIONS.md D28: symplectic Euler with the viscosity, substeps chosen per frame, "
-             "fracture once per frame) from its own prepared state, as `BM_Frame` does for the paper's. Medians; "
+             "fracture and restoration every 1/240 s of simulated time) from its own prepared state, as `BM_Frame` does for the paper's. Medians; "
              "events per frame from the counters.", "",
              "| configuration | N | default ms/frame | splits / restores per frame | paper ms/frame | "
              "splits / restores per frame | default / paper |", "|---|---:|---:|---:|---:|---:|---:|"]
