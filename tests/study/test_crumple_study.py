@@ -5,6 +5,8 @@ at a time and run side by side (a long reference level beside a short one), each
 crumple.json when it ends. Catches a save that replaces a stage's whole entry with what one run
 computed: the other run's cases would vanish.
 """
+import contextlib
+import io
 import sys
 import tempfile
 import unittest
@@ -123,6 +125,43 @@ class ParetoMethods(unittest.TestCase):
         self.assertTrue(all("--integrator xpbd" in r for r in runner.ran), runner.ran)
         self.assertEqual({r["method"] for r in rows.values()}, {"xpbd", "paper"})
         self.assertAlmostEqual(rows["paper/S1"]["error"]["max"], 0.035)
+
+
+class SeriesChart(unittest.TestCase):
+    """The report's kinetic-energy and facet chart reads the cache only: a configuration whose
+    seeds are not all cached is left out, never run (the report stage must not start hour-long
+    crumples). Catches a chart that runs what is missing, or that finds none of the stages' runs
+    (its command lines differing from the ones the pareto and converge stages cache)."""
+
+    def test_cached_configurations_only(self):
+        ref = {s: {"mean": 1.0, "sd": 0.01} for s in crumple_study.STATS}
+        stage_keys = set()
+
+        class Recorder:  # what the stages run for N64_k1e4: the cache of the fake runner below
+            def cached(self, lines):
+                return False  # so that pareto runs only the named methods
+
+            def run(self, lines):
+                stage_keys.update(" ".join(str(a) for a in args) for args in lines)
+                return [{"exit": 0, **{s: 1.0 for s in crumple_study.STATS}} for _ in lines]
+
+        with mock.patch.object(crumple_study, "reference_level", return_value=(256, ref)), \
+                contextlib.redirect_stdout(io.StringIO()):
+            crumple_study.stage_pareto(Recorder(), False, ["N64_k1e4"], methods=["paper", "default"])
+        with mock.patch.object(crumple_study, "CONVERGE_CASES",
+                               [("N64_k1e4", ["--grid", 64], 1e4, [256], 256, 0.0)]), \
+                contextlib.redirect_stdout(io.StringIO()):
+            crumple_study.stage_converge(Recorder(), False, ["N64_k1e4"])
+
+        runner = ParetoMethods.FakeRunner(cached_methods=[])
+        runner.cached = lambda lines: all(" ".join(str(a) for a in args) in stage_keys for args in lines)
+        charted = {}
+        with mock.patch.object(crumple_study, "reference_level", return_value=(256, ref)), \
+                mock.patch("crumple_series.chart", side_effect=lambda groups, *_: charted.update(groups)):
+            crumple_study.chart_series(runner, "N64_k1e4", "unused.png")
+        self.assertEqual(runner.ran, [])
+        self.assertEqual(set(charted), {"paper's step (S = 1)", "default", "converged (S = 256)"})
+
 
 if __name__ == "__main__":
     unittest.main()
