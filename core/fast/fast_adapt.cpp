@@ -22,7 +22,10 @@ namespace crumple::fast {
 namespace {
 constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §4)
 
-constexpr int kTestGrain = 4096;  ///< adapt_test streams cheaply over every edge: large chunks
+/// adapt_test streams cheaply over every edge: large blocks, each a whole number of the
+/// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
+constexpr int kTestBlock = 4096;
+static_assert(kTestBlock % Parallel::kLanes == 0);
 constexpr int kRenewGrain = 512;  ///< an area or a few normals per triangle: less than an event
 
 constexpr int kSkip = 64;  ///< decisions tested at once: one line
@@ -73,8 +76,26 @@ void FastSimulator::adapt_decide() {
   c.step = steps_;
   c.fracture = params_.fracture;
   c.restoration = params_.restoration;
-  decisions_.resize(std::size_t(topo_.E.size()));
-  par_.run_lanes(topo_.E.size(), kTestGrain, [&](int b, int e) { adapt_test(topo_, c, decisions_.data(), b, e); });
+  const int n = topo_.E.size();
+  decisions_.resize(std::size_t(n));
+  events_.found.resize(2 * std::size_t(Parallel::blocks_of(n, kTestBlock)));
+  par_.run_blocks(n, kTestBlock, [&](int b, int begin, int end) {
+    adapt_test(topo_, c, decisions_.data(), begin, end);
+    list_events(b, begin, end);
+  });
+}
+
+// Block b's events, listed while its decisions and its edges' ids are still in cache from the
+// test (the pass would otherwise read them again, each at random, to order the events).
+void FastSimulator::list_events(int b, int begin, int end) {
+  std::vector<std::uint64_t>& splits = events_.found[2 * std::size_t(b)];
+  std::vector<std::uint64_t>& restores = events_.found[2 * std::size_t(b) + 1];
+  splits.clear(), restores.clear();
+  const std::int32_t* lid = topo_.E.lid.data();
+  for_each_nonzero(decisions_.data(), begin, end, [&](int e) {
+    const std::uint64_t key = std::uint64_t(std::uint32_t(lid[e])) << 32 | std::uint32_t(e);
+    (decisions_[e] == 1 ? splits : restores).push_back(key);
+  });
 }
 
 StepEvents FastSimulator::adapt_apply() {
@@ -99,32 +120,18 @@ StepEvents FastSimulator::adapt_apply() {
 }
 
 void FastSimulator::collect_events() {
-  EventLists& s = events_;
   // The events apply in ascending logical edge id (the order of MODEL.md §4 and of the
-  // reference). Two parallel passes over fixed blocks, no sort: the decisions (per slot) are
-  // copied to their logical ids, then read back in logical order, each block listing its
-  // events' slots. A pending event's edge keeps its slot through the pass: splits free no
-  // edge, and restores free only mesh edges, never a pending (auxiliary) one.
-  const int n = int(decisions_.size());
-  constexpr int kBlock = 16384;  // ids per block: short per-block lists, and blocks for every thread on a large mesh
-  const int blocks = Parallel::blocks_of(n, kBlock);
-  by_id_.resize(std::size_t(n), 0);  // all 0 between passes
-  par_.run_blocks(n, kBlock, [&](int, int begin, int end) {
-    for_each_nonzero(decisions_.data(), begin, end, [&](int e) { by_id_[topo_.E.lid[e]] = decisions_[e]; });
-  });
-  std::vector<std::vector<int>>& found = s.found;  // per block and kind: slots in id order
-  found.resize(2 * std::size_t(blocks));
-  par_.run_blocks(n, kBlock, [&](int b, int begin, int end) {
-    found[2 * b].clear(), found[2 * b + 1].clear();
-    for_each_nonzero(by_id_.data(), begin, end, [&](int id) {
-      found[2 * b + by_id_[id] - 1].push_back(topo_.E.phys[id]);
-      by_id_[id] = 0;
-    });
-  });
+  // reference): each kind's keys from every block, sorted (ids are unique, so the order is
+  // total). A pending event's edge keeps its slot through the pass: splits free no edge, and
+  // restores free only mesh edges, never a pending (auxiliary) one.
+  EventLists& s = events_;
   for (int kind : {0, 1}) {
+    s.keys.clear();
+    for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2) s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
+    std::sort(s.keys.begin(), s.keys.end());
     std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
-    slots.clear();
-    for (int b = 0; b < blocks; ++b) slots.insert(slots.end(), found[2 * b + kind].begin(), found[2 * b + kind].end());
+    slots.resize(s.keys.size());
+    for (std::size_t k = 0; k < s.keys.size(); ++k) slots[k] = int(std::uint32_t(s.keys[k]));
   }
 }
 

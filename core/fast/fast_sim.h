@@ -143,6 +143,7 @@ class FastSimulator final : public Simulator {
   friend class SplitRounds;
   friend class RestoreWaves;
   friend struct SerialEvents;
+  void list_events(int block, int begin, int end);
   void collect_events();
   void renew_normals();
   void collect_renewed_vertices();
@@ -170,14 +171,14 @@ class FastSimulator final : public Simulator {
   // Per-element scratch of the topology pass, in Arrays like the topology's (a copy keeps their
   // room, growth is faulted in ahead: D16), reserved with it in the constructor.
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
-  Array<std::uint8_t> by_id_;             ///< the nonzero decisions per logical id (0 between passes)
   Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
   std::vector<int> renewed_;              ///< the vertices whose normals this pass renews
-  /// collect_events' temporaries, kept from pass to pass so that a pass allocates (and faults
-  /// in) no memory.
+  /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
+  /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.
   struct EventLists {
-    std::vector<std::vector<int>> found;  ///< event slots per block of ids and kind
-    std::vector<int> splits, restores;    ///< event slots in event order
+    std::vector<std::vector<std::uint64_t>> found;  ///< keys per block of adapt_test and kind, in slot order
+    std::vector<std::uint64_t> keys;                ///< one kind's keys, sorted
+    std::vector<int> splits, restores;              ///< event slots in event order
   };
   EventLists events_;
   TriangleStamps stamps_;                 ///< the triangles this pass's events changed
