@@ -127,7 +127,8 @@ void FastSimulator::collect_events() {
   EventLists& s = events_;
   for (int kind : {0, 1}) {
     s.keys.clear();
-    for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2) s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
+    for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2)
+      s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
     std::sort(s.keys.begin(), s.keys.end());
     std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
     slots.resize(s.keys.size());

@@ -131,7 +131,7 @@ class FastSimulator final : public Simulator {
   void integrate_xpbd();
   void viscous_step(const StepConstants& c);  ///< the viscosity's implicit step, no force
   StepEvents adapt();
-  void adapt_decide();     ///< normals on the current state and adapt_test into decisions_
+  void adapt_decide();     ///< normals on the current state, adapt_test into decisions_, the events listed
   StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
   // The caller's manipulators (fast_manipulators.cpp).
   int live_slot(int id) const;  ///< slot of live vertex id, else -1
