@@ -278,9 +278,11 @@ def step_options(S, opts):
     return [] if "--substeps" in opts else ["--substeps", S]
 
 
-def method_lines(name, S, mesh, kappa, seeds):
-    """A method's command lines at S substeps, one a seed, as the pareto stage runs them."""
-    opts, backend, _ = METHODS[name]
+def method_lines(name, S, mesh, kappa, seeds, backend=None):
+    """A method's command lines at S substeps, one a seed, as the pareto stage runs them (on
+    `backend` instead of the method's own where given: the backends stage)."""
+    opts, own, _ = METHODS[name]
+    backend = backend or own
     return [["--seed", s, "--backend", backend, "--threads", 1, "--kappa", kappa] + step_options(S, opts) + opts + mesh
             for s in seeds]
 
@@ -289,6 +291,8 @@ def level_lines(S, mesh, kappa, seeds):
     """A level of the converge stage: symplectic Euler + the default c at S substeps, one a seed."""
     return [["--seed", s, "--backend", "fast", "--threads", 1, "--integrator", "explicit", "--viscosity", DEFAULT_C,
              "--substeps", S, "--kappa", kappa] + mesh for s in seeds]
+
+
 PARETO_CASES = {"N32_k1e4": (["--grid", 32], 1e4), "N64_k1e4": (["--grid", 64], 1e4),
                 "N128_k1e4": (["--grid", 128], 1e4), "N256_k1e4": (["--grid", 256], 1e4),
                 "N64_k1e5": (["--grid", 64], 1e5), "N128_k1e5": (["--grid", 128], 1e5)}
@@ -379,10 +383,9 @@ def stage_backends(runner, quick):
     for label, (mesh, kappa) in BACKEND_CASES.items():
         rows = {}
         for name in BACKEND_METHODS:
-            opts, _, settings = METHODS[name]
+            _, _, settings = METHODS[name]
             for S in settings:
-                both = {b: summary(runner.run([["--seed", s, "--backend", b, "--threads", 1, "--kappa", kappa]
-                                               + step_options(S, opts) + opts + mesh for s in seeds]))
+                both = {b: summary(runner.run(method_lines(name, S, mesh, kappa, seeds, backend=b)))
                         for b in ("reference", "fast")}
                 gap = {}
                 for stat in ERROR_STATS:
