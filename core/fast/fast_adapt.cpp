@@ -26,7 +26,7 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 /// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
 constexpr int kTestBlock = 4096;
 static_assert(kTestBlock % Parallel::kLanes == 0);
-constexpr int kRenewGrain = 512;  ///< an area or a few normals per triangle: less than an event
+constexpr int kRenewGrain = 512;  ///< a normal per vertex: far less than an event
 
 constexpr int kSkip = 64;  ///< decisions tested at once: one line
 
@@ -137,25 +137,11 @@ void FastSimulator::collect_events() {
 }
 
 void FastSimulator::renew_normals() {
-  // Bring the areas and normals computed for the decisions up to date where the topology
-  // changed, so the next step need not recompute them all: the changed triangles' areas (a dead
-  // one gets the zero it has), then the normal of each corner of a live changed triangle, once
-  // (each normal is a function of the areas alone, so the order changes nothing).
-  const std::vector<int>& changed = stamps_.changed();
-  const float unit = length_unit();
+  // Bring the normals computed for the decisions up to date where the topology changed, so the
+  // next step need not recompute them all: the normal of each corner of a live changed triangle,
+  // once (each normal is a function of the areas alone, so the order changes nothing). The
+  // changed triangles' areas are current: each split and restore computed its own.
   const Vertices& V = topo_.V;
-  const Triangles& T = topo_.T;
-  Float4* area = topo_.T.area.data();
-  // Prefetched kNear on: the changed triangle's corners' positions (the triangle lines themselves
-  // kFar on): the changed triangles are scattered, so each one's lines miss.
-  par_.run(int(changed.size()), kRenewGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      if (k + kFar < e) prefetch_triangle(topo_, changed[k + kFar]);
-      if (k + kNear < e)
-        for (int v : T.corners(changed[k + kNear])) prefetch_read(&V.xm[v]);
-      triangle_areas(topo_, unit, area, changed[k], changed[k] + 1);
-    }
-  });
   collect_renewed_vertices();
   // Prefetched kNear on: the vertex's list head and its list (not the areas the list names:
   // prefetching them too made the renewal slower, docs/PERFORMANCE.md).
@@ -179,7 +165,8 @@ void FastSimulator::collect_renewed_vertices() {
   renewed_.clear();
   const std::vector<int>& changed = stamps_.changed();
   for (std::size_t k = 0; k < changed.size(); ++k) {
-    if (k + kNear < changed.size())  // the face is cached from the areas just computed; its corners' stamps are not
+    if (k + kFar < changed.size()) prefetch_read(&T[changed[k + kFar]]), prefetch_read(&T.alive[changed[k + kFar]]);
+    if (k + kNear < changed.size())  // its face prefetched kFar on, so its corners' stamps kNear on
       for (int v : T.corners(changed[k + kNear])) prefetch(&vertex_stamp_[v]);
     const int t = changed[k];
     if (!T.alive[t]) continue;

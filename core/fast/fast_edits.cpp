@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "fast/fast_sim.h"
+#include "fast/kernels.h"
 #include "model/random.h"
 
 namespace crumple::fast {
@@ -21,59 +22,124 @@ double norm(const D3& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); 
 // rounded, where pow is within about half an ulp and costs some hundred instructions a call.
 double root_of_delta(double delta, double varphi) { return varphi == 2.0 ? std::sqrt(delta) : std::pow(delta, 1.0 / varphi); }
 
-// Triangle t's side out of corner v (its edge from v to the next corner), or -1.
-int side_from(const Triangles& T, int t, int v) {
+// Corner of v in triangle t (0, 1 or 2; t has v as a corner).
+int corner_of(const Triangles& T, int t, int v) {
   const Face& f = T[t];
-  for (int k = 0; k < 3; ++k)
-    if (f.v[k] == v) return f.e[k];
-  return -1;
+  return f.v[0] == v ? 0 : f.v[1] == v ? 1 : 2;
 }
 
-// Triangle t with corner `from` moved to `to`, keeping the rotation: the side into the corner
-// becomes edge `in`, the side out of it edge `out`, the third side stays. Read before detach(t).
-Face moved_corner(const Triangles& T, int t, int from, int to, int in, int out) {
-  Face f = T[t];
-  for (int k = 0; k < 3; ++k)
-    if (f.v[k] == from) f.v[k] = to, f.e[k] = out, f.e[(k + 2) % 3] = in;
-  return f;
+// Points the link that edge s keeps to triangle `from` (its tri0 or tri1) at triangle `to`, whose
+// corner off s is `wing`.
+void relink_side(Edges& E, int s, int from, int to, int wing) {
+  EdgeRecord& r = E[s];
+  if (r.tri0 == from) r.tri0 = to, r.wl = wing;
+  else r.tri1 = to, r.wr = wing;
+}
+
+// The links of a new edge: its triangle traversing a->b with that triangle's third corner, the
+// same for b->a (-1 where a triangle does not exist).
+void link_edge(Edges& E, int e, int t0, int w0, int t1, int w1) {
+  EdgeRecord& r = E[e];
+  r.tri0 = t0, r.wl = t0 >= 0 ? w0 : -1;
+  r.tri1 = t1, r.wr = t1 >= 0 ? w1 : -1;
+}
+
+// One wing of a split: triangle t = (stay, moved, wing), in its rotation, becomes (stay, n, wing)
+// in its slot and tn = (n, moved, wing) is new; e_stay joins stay and n, e_moved n and moved,
+// e_wing the wing and n (new edges, listed). Each link is written once, where it changes: t
+// keeps its entries at stay and wing with a new opposite edge, its entry at moved becomes tn's
+// in place, and the wing appends tn (a detach and an attach of t and tn would erase three
+// entries and append six).
+void split_wing(Topology& m, int t, int tn, int n, int moved, int e_stay, int e_moved, int e_wing) {
+  Edges& E = m.E;
+  Face& f = m.T[t];
+  const int km = corner_of(m.T, t, moved), ks = (km + 2) % 3, kw = (km + 1) % 3;
+  const int stay = f.v[ks], wing = f.v[kw], s_mw = f.e[km], s_ws = f.e[kw];
+  if (E[e_wing].a == n) link_edge(E, e_wing, t, stay, tn, moved);  // t runs n -> wing, tn back
+  else link_edge(E, e_wing, tn, moved, t, stay);
+  relink_side(E, s_mw, t, tn, n);
+  relink_side(E, s_ws, t, t, n);
+  f.v[km] = n, f.e[km] = e_wing, f.e[ks] = e_stay;
+  m.init_triangle(tn);
+  m.T[tn] = Face{{n, moved, wing}, {e_moved, s_mw, e_wing}};
+  m.relist_tri(stay, (t << 2) | ks, (t << 2) | ks, e_wing);
+  m.relist_tri(wing, (t << 2) | kw, (t << 2) | kw, e_stay);
+  m.relist_tri(moved, (t << 2) | km, (tn << 2) | 1, e_wing);
+  m.list_tri(wing, (tn << 2) | 2, e_moved);
 }
 
 // A split's topology (MODEL.md §5): e_ij becomes an auxiliary spring holding the crease at its
 // current length `lt`, with the crease's wings in its wing slots (for [Eq 10]); n joins i, j, l,
-// r by new mesh edges of rest lengths `rest`; (i,j,l) and (j,i,r) become four triangles. Fills
-// rec.t and stores rec; false if a triangle does not link.
-bool relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt, const std::array<float, 4>& rest) {
+// r by new mesh edges of rest lengths `rest`; (i,j,l) and (j,i,r) become (i,n,l), (n,j,l),
+// (j,n,r) and (n,i,r). Fills rec.t and stores rec.
+void relink_split(Topology& m, const SplitPlan& plan, SplitRecord& rec, float lt, const std::array<float, 4>& rest) {
+  Edges& E = m.E;
   const int e = plan.e, n = plan.n;
-  const int i = m.E[e].a, j = m.E[e].b, l = m.E[e].wl, r = m.E[e].wr, tL = m.E[e].tri0, tR = m.E[e].tri1;
-  // The four triangles' sides, read before detach clears them.
-  const std::array<int, 4>& en = plan.edges;  // e_in, e_nj, e_ln, e_nr
-  Face faces[4];
-  if (tL >= 0) {  // (i,j,l) -> (i,n,l) and (n,j,l)
-    faces[0] = moved_corner(m.T, tL, j, n, en[0], en[2]);
-    faces[1] = {{n, j, l}, {en[1], side_from(m.T, tL, j), en[2]}};
-  }
-  if (tR >= 0) {  // (j,i,r) -> (j,n,r) and (n,i,r)
-    faces[2] = moved_corner(m.T, tR, i, n, en[1], en[3]);
-    faces[3] = {{n, i, r}, {en[0], side_from(m.T, tR, i), en[3]}};
-  }
-  for (int t : {tL, tR})
-    if (t >= 0) m.detach(t);
-  m.E[e].flags = kAlive;
-  m.E[e].wl = l;
-  m.E[e].wr = r;
-  m.E[e].l0 = lt;
+  const int i = E[e].a, j = E[e].b, l = E[e].wl, r = E[e].wr, tL = E[e].tri0, tR = E[e].tri1;
+  const std::array<int, 4>& en = plan.edges;       // e_in, e_nj, e_ln, e_nr
+  const int t1 = plan.tris[0], t3 = plan.tris[1];  // (n,j,l), (n,i,r)
+  E[e].flags = kAlive;
+  E[e].tri0 = E[e].tri1 = -1;
+  E[e].l0 = lt;
+  E[e].record = plan.record;  // wl, wr keep l and r
   m.init_edge(en[0], i, n, rest[0]);
   m.init_edge(en[1], n, j, rest[1]);
-  if (l >= 0) m.init_edge(en[2], l, n, rest[2]);
-  if (r >= 0) m.init_edge(en[3], n, r, rest[3]);
-  if (tL >= 0) rec.t[0] = tL, rec.t[1] = plan.tris[0], m.init_triangle(plan.tris[0]);
-  if (tR >= 0) rec.t[2] = tR, rec.t[3] = plan.tris[1], m.init_triangle(plan.tris[1]);
-  bool ok = true;
-  for (int q = 0; q < 4; ++q)
-    if (rec.t[q] >= 0) ok &= m.attach(rec.t[q], faces[q]);
+  link_edge(E, en[0], tL, l, t3, r);
+  link_edge(E, en[1], t1, l, tR, r);
+  if (tL >= 0) {
+    m.init_edge(en[2], l, n, rest[2]);
+    split_wing(m, tL, t1, n, j, en[0], en[1], en[2]);
+    rec.t[0] = tL, rec.t[1] = t1;
+  }
+  if (tR >= 0) {
+    m.init_edge(en[3], n, r, rest[3]);
+    split_wing(m, tR, t3, n, i, en[1], en[0], en[3]);
+    rec.t[2] = tR, rec.t[3] = t3;
+  }
+  // n's list in the order of the triangles in rec.t, each entry's wing the side opposite n.
+  std::int32_t entries[4], wings[4];
+  int count = 0;
+  for (int q = 0; q < 4; ++q) {
+    const int t = rec.t[q];
+    if (t < 0) continue;
+    const int k = corner_of(m.T, t, n);
+    entries[count] = (t << 2) | k, wings[count++] = m.T[t].e[(k + 1) % 3];
+  }
+  m.list_tris(n, entries, wings, count);
   m.records[plan.record] = rec;
-  m.E[e].record = plan.record;
-  return ok;
+}
+
+// One wing of a restore, the inverse of split_wing: t = (stay, n, wing) becomes (stay, moved,
+// wing) again, its sides the restored edge e and tn's; tn = (n, moved, wing) leaves the wing's
+// list and its entry at moved becomes t's in place, so that a split undone before any other
+// edit at its vertices gives back every list as it was.
+void restore_wing(Topology& m, int t, int tn, int n, int moved, int e) {
+  Edges& E = m.E;
+  Face& f = m.T[t];
+  const int km = corner_of(m.T, t, n), ks = (km + 2) % 3, kw = (km + 1) % 3;
+  const int stay = f.v[ks], wing = f.v[kw], s_ws = f.e[kw];
+  const int c = corner_of(m.T, tn, moved), s_mw = m.T[tn].e[c];
+  relink_side(E, s_mw, tn, t, stay);
+  relink_side(E, s_ws, t, t, moved);
+  f.v[km] = moved, f.e[km] = s_mw, f.e[ks] = e;
+  m.relist_tri(stay, (t << 2) | ks, (t << 2) | ks, s_mw);
+  m.relist_tri(wing, (t << 2) | kw, (t << 2) | kw, e);
+  m.relist_tri(moved, (tn << 2) | c, (t << 2) | km, s_ws);
+  m.unlist_tri(wing, (tn << 2) | corner_of(m.T, tn, wing));
+}
+
+// A restore's topology: (i,n,l) -> (i,j,l) and (j,n,r) -> (j,i,r) in their slots, e_ij a mesh
+// edge of both again. n's own lists are dropped whole, so that the releases after this erase
+// n's edges only at their other ends.
+void relink_restore(Topology& m, int e, const SplitRecord& s) {
+  const int l = s.k[2], r = s.k[3], n = s.n;
+  m.V.spring_list[n].count = m.V.tri_list[n].count = 0;
+  m.E[e].flags = kAlive | kMesh | kBreakable;
+  m.E[e].l0 = float(s.l0);
+  m.E[e].record = -1;
+  link_edge(m.E, e, s.t[0], l, s.t[2], r);  // e joins i -> j (its a and b since the split)
+  if (s.t[0] >= 0) restore_wing(m, s.t[0], s.t[1], n, s.k[1], e);
+  if (s.t[2] >= 0) restore_wing(m, s.t[2], s.t[3], n, s.k[0], e);
 }
 
 bool is_triangle(const Triangles& T, int t, int a, int b, int c) {
@@ -189,7 +255,13 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   rec.e = plan.edges;
   const float lt_f = float(lt);
   const std::array<float, 4> rest{float(l0 / 2), float(l0 / 2), float(dist[2]), float(dist[3])};
-  return relink_split(m, plan, rec, lt_f, rest);
+  relink_split(m, plan, rec, lt_f, rest);
+  // The four triangles' areas while their corners are cached (renew_normals reads them; no
+  // later event of the pass reads or changes these triangles: the stamps skip it).
+  const float unit = length_unit();
+  for (int t : rec.t)
+    if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);
+  return true;
 }
 
 bool FastSimulator::can_restore(int e) const {
@@ -221,7 +293,7 @@ Freed FastSimulator::restore_edge_local(int e) {
   Vertices& V = m.V;
   const int rid = m.E[e].record;
   const SplitRecord s = m.records[rid];
-  const int i = s.k[0], j = s.k[1], n = s.n;
+  const int n = s.n;
   const Float4 row_n = V.vm[n];
   const double mn = row_n.w;
   const D3 vn{row_n.x, row_n.y, row_n.z};
@@ -255,15 +327,10 @@ Freed FastSimulator::restore_edge_local(int e) {
       vk.z = float(vk.z + mn * vn.z / msum);
     }
   }
-  // (i,n,l) -> (i,j,l) and (j,n,r) -> (j,i,r), their sides read before detach clears them.
-  Face faces[2];
-  if (s.t[0] >= 0) faces[0] = moved_corner(m.T, s.t[0], n, j, e, side_from(m.T, s.t[1], j));
-  if (s.t[2] >= 0) faces[1] = moved_corner(m.T, s.t[2], n, i, e, side_from(m.T, s.t[3], i));
-  // n goes with its four triangles and edges: its lists are dropped whole here, so that the
-  // detaches and releases below erase their entries only at the other corners and ends.
-  V.spring_list[n].count = V.tri_list[n].count = 0;
-  for (int t : s.t)
-    if (t >= 0) m.detach(t);
+  relink_restore(m, e, s);
+  const float unit = length_unit();
+  for (int t : {s.t[0], s.t[2]})  // as after a split; the two released triangles' areas are 0
+    if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);
   Freed freed;
   for (int q = 0; q < 4; ++q)
     if (s.e[q] >= 0) m.release_edge(s.e[q]), freed.edges[q] = s.e[q];
@@ -272,12 +339,6 @@ Freed FastSimulator::restore_edge_local(int e) {
   m.release_vertex(n);
   freed.vertex = n;
   freed.record = rid;
-  m.E[e].flags = kAlive | kMesh | kBreakable;
-  m.E[e].l0 = float(s.l0);
-  m.E[e].record = -1;
-  m.E[e].wl = m.E[e].wr = -1;  // attach below links its triangles' wings
-  if (s.t[0] >= 0) m.attach(s.t[0], faces[0]);
-  if (s.t[2] >= 0) m.attach(s.t[2], faces[1]);
   return freed;
 }
 

@@ -53,8 +53,8 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
       if (v >= 0) round = std::max(round, tally_[v].round_last);
     ++round;
     // Room in the adjacency lists for every append (make_room): a split adds one spring at each
-    // of i, j, l, r and, net, one triangle at l and at r (i and j lose their two triangles
-    // before they gain two).
+    // of i, j, l, r and, net, one triangle at l and at r (the entries of i and j change in
+    // place: fast_edits.cpp).
     for (int q = 0; q < 4; ++q) {
       const int v = c.ends[q];
       if (v < 0) continue;

@@ -238,18 +238,6 @@ bool Topology::attach(int t, const Face& f) {
   return true;
 }
 
-void Topology::detach(int t) {
-  const Face f = T[t];
-  const std::array<int, 3>&v = f.v, &es = f.e;
-  for (int e : es) {
-    if (e < 0) continue;
-    if (E[e].tri0 == t) E[e].tri0 = E[e].wl = -1;
-    if (E[e].tri1 == t) E[e].tri1 = E[e].wr = -1;
-  }
-  for (int k = 0; k < 3; ++k) unlist_tri(v[k], (t << 2) | k);
-  T[t].e = kNoFace.e;
-}
-
 // Appends move a full list first, which only serial code may do: parallel edits reserve room
 // beforehand (make_room), so that an append never moves a block while another thread reads.
 void Topology::list_spring(int v, int entry, int other) {
@@ -269,6 +257,23 @@ void Topology::list_tri(int v, int entry, int wing_edge) {
   const std::size_t slot = std::size_t(head.at) + head.count++;
   V.tris[slot] = entry;
   V.wings[slot] = wing_edge;
+}
+void Topology::list_tris(int v, const std::int32_t* entries, const std::int32_t* wing_edges, int count) {
+  if (V.tri_list[v].count + count > V.tri_list[v].room) move_block(v, false, V.tri_list[v].count + count);
+  ListHead& head = V.tri_list[v];
+  const std::size_t slot = std::size_t(head.at) + head.count;
+  std::copy_n(entries, count, &V.tris[slot]);
+  std::copy_n(wing_edges, count, &V.wings[slot]);
+  head.count = std::uint16_t(head.count + count);
+}
+void Topology::relist_tri(int v, int entry, int to, int wing_edge) {
+  const std::size_t base = std::size_t(V.tri_list[v].at);
+  std::int32_t* list = &V.tris[base];
+  int k = 0;
+  while (k < V.tri_list[v].count && list[k] != entry) ++k;
+  if (k == V.tri_list[v].count) return;  // not listed: an inconsistent mesh, which check() reports
+  list[k] = to;
+  V.wings[base + std::size_t(k)] = wing_edge;
 }
 void Topology::unlist_tri(int v, int entry) {
   const std::size_t base = std::size_t(V.tri_list[v].at);

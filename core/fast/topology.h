@@ -214,8 +214,15 @@ class Topology {
   /// The same with each side's edge looked up (mesh_edge, a scan of a's list per side): for
   /// building a mesh; an event knows its edges and names them.
   bool attach(int t, int a, int b, int c);
-  void detach(int t);  ///< the inverse of attach (t stays allocated)
-
+  /// Appends `entry` (triangle << 2 | corner) with the edge opposite v to v's triangle list:
+  /// room first (make_room) where this runs in parallel.
+  void list_tri(int v, int entry, int wing_edge);
+  /// Appends `count` entries and their opposite edges at once (a new vertex's whole list).
+  void list_tris(int v, const std::int32_t* entries, const std::int32_t* wing_edges, int count);
+  /// Overwrites `entry` in v's triangle list, in place, with `to` and its opposite edge (a
+  /// triangle that keeps its corner at v, or one that takes another's place there).
+  void relist_tri(int v, int entry, int to, int wing_edge);
+  void unlist_tri(int v, int entry);  ///< erases `entry` from v's triangle list, keeping the order
 
   int live_vertices() const;
   int live_mesh_edges() const;
@@ -232,8 +239,6 @@ class Topology {
  private:
   void list_spring(int v, int entry, int other);
   void unlist_spring(int v, int entry);
-  void list_tri(int v, int entry, int wing_edge);
-  void unlist_tri(int v, int entry);
   void move_block(int v, bool springs, int need);  ///< v's list to a new block of room >= need
   std::string check_blocks() const;                 ///< empty if the pools are consistent
 };

@@ -428,6 +428,49 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
   }
 }
 
+// A split undone at once gives back the mesh exactly: every vertex's spring and triangle lists
+// in the same order with the same parallel entries, every edge record and every triangle's
+// corners and sides in the same rotation (the split rewrites its two triangles' entries in place
+// and the restore rewrites them back, fast_edits.cpp). Every edge of a small grid, boundary ones
+// included. Catches: an edit that erases and re-appends an entry (the list's order changes), a
+// wrong wing edge or side left behind, a triangle stored in another rotation.
+TEST(FastTopology, SplitUndoneGivesBackEveryListInOrder) {
+  Params p;
+  fast::FastSimulator sim(make_grid(6), p, 1);
+  const fast::Topology& m = sim.topology();
+  auto lists = [&m](int v) {
+    const fast::ListHead s = m.V.spring_list[v], t = m.V.tri_list[v];
+    std::vector<std::int32_t> out;
+    for (int k = 0; k < s.count; ++k) out.push_back(m.springs_of(v)[k]), out.push_back(m.nbrs_of(v)[k]);
+    out.push_back(-1);
+    for (int k = 0; k < t.count; ++k) out.push_back(m.tris_of(v)[k]), out.push_back(m.wings_of(v)[k]);
+    return out;
+  };
+  auto edge = [&m](int e) {
+    const fast::EdgeRecord& r = m.E[e];
+    return std::vector<double>{double(r.a), double(r.b), double(r.wl), double(r.wr), double(r.tri0), double(r.tri1),
+                               double(r.l0), double(r.record), double(r.flags)};
+  };
+  const int nv = m.V.size(), ne = m.E.size(), nt = m.T.size();
+  for (int e = 0; e < ne; ++e) {
+    std::vector<std::vector<std::int32_t>> before_lists;
+    std::vector<std::vector<double>> before_edges;
+    std::vector<fast::Face> before_faces(m.T.slots.begin(), m.T.slots.begin() + nt);
+    for (int v = 0; v < nv; ++v) before_lists.push_back(lists(v));
+    for (int k = 0; k < ne; ++k) before_edges.push_back(edge(k));
+    ASSERT_TRUE(sim.split(e)) << e;
+    ASSERT_EQ(sim.check_topology(), "") << e;
+    ASSERT_TRUE(sim.restore(e)) << e;
+    ASSERT_EQ(sim.check_topology(), "") << e;
+    for (int v = 0; v < nv; ++v) ASSERT_EQ(lists(v), before_lists[v]) << "edge " << e << ", vertex " << v;
+    for (int k = 0; k < ne; ++k) ASSERT_EQ(edge(k), before_edges[k]) << "edge " << e << ", edge " << k;
+    for (int t = 0; t < nt; ++t) {
+      ASSERT_EQ(m.T[t].v, before_faces[t].v) << "edge " << e << ", triangle " << t;
+      ASSERT_EQ(m.T[t].e, before_faces[t].e) << "edge " << e << ", triangle " << t;
+    }
+  }
+}
+
 // Issue 14, defect 1: adjacency memory followed the largest valence (one stride for every
 // vertex), so a fan disk with one vertex of valence 10,000 needed gigabytes. With per-vertex blocks
 // the pools hold about kMinRoom entries per vertex plus the hub's own list (about twice it,
