@@ -6,6 +6,10 @@
 #include <stdexcept>
 #include <sstream>
 
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+#include <immintrin.h>
+#endif
+
 namespace crumple::fast {
 
 namespace {
@@ -15,11 +19,26 @@ void grow(std::size_t n, A&... arrays) {
   (arrays.keep_warm(), ...);
 }
 
+// Position of `entry` in a list of `count` items, or count. Every block holds at least kMinRoom
+// entries (topology.h), so the first eight are compared at once without a bounds test: an
+// event's lists hold about six, where a loop mispredicts its exit once a search.
+int find_entry(const std::int32_t* list, int count, std::int32_t entry) {
+  int k = 0;
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+  static_assert(kMinRoom >= 8);
+  const __m256i eq = _mm256_cmpeq_epi32(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(list)), _mm256_set1_epi32(entry));
+  const unsigned hits = unsigned(_mm256_movemask_ps(_mm256_castsi256_ps(eq))) & (count >= 8 ? 0xffu : (1u << count) - 1);
+  if (hits) return __builtin_ctz(hits);
+  k = 8;
+#endif
+  while (k < count && list[k] != entry) ++k;
+  return std::min(k, count);
+}
+
 // Erases `entry` from a slot list of `count` items and the same slot of its parallel list,
 // keeping the order.
 void erase_slot(std::int32_t* list, std::int32_t* parallel, std::uint16_t& count, int entry) {
-  int k = 0;
-  while (k < count && list[k] != entry) ++k;
+  const int k = find_entry(list, count, entry);
   if (k == count) return;
   // The entries after k move down one, carried from the end in one loop over both lists: the
   // lists hold a few entries, where the two library moves a plain shift compiles to cost more.
@@ -269,8 +288,7 @@ void Topology::list_tris(int v, const std::int32_t* entries, const std::int32_t*
 void Topology::relist_tri(int v, int entry, int to, int wing_edge) {
   const std::size_t base = std::size_t(V.tri_list[v].at);
   std::int32_t* list = &V.tris[base];
-  int k = 0;
-  while (k < V.tri_list[v].count && list[k] != entry) ++k;
+  const int k = find_entry(list, V.tri_list[v].count, entry);
   if (k == V.tri_list[v].count) return;  // not listed: an inconsistent mesh, which check() reports
   list[k] = to;
   V.wings[base + std::size_t(k)] = wing_edge;
