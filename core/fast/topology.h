@@ -25,8 +25,9 @@
 // every block sized to its list: memory follows each vertex's own valence (one vertex of valence
 // 10,000 costs its own list, not a stride for every vertex), and neighbouring vertices' lists
 // share cache lines. Blocks move only in serial code (the split rounds reserve room first).
-// List order only changes by appending and by order-preserving erase, so every sum over a list
-// has one order on any thread count.
+// List order only changes by appending, by order-preserving erase and by overwriting an entry
+// in place (an event's triangle that changes hands), each in event order at a vertex, so every
+// sum over a list has one order on any thread count.
 #pragma once
 
 #include <algorithm>
