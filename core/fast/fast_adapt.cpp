@@ -105,9 +105,15 @@ StepEvents FastSimulator::adapt_apply() {
   if (params_.max_vertices > 0)  // the hard guard, as the reference: the budget's first candidates
     splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - topo_.live_vertices())));
   StepEvents ev;
-  ev.splits = serial_edits_ ? SerialEvents::splits(*this, splits, stamps_) : rounds_.apply(*this, splits, stamps_);
-  ev.restores = serial_edits_ ? SerialEvents::restores(*this, events_.restores, stamps_)
-                              : waves_.apply(*this, events_.restores, stamps_);
+  touched_.clear();
+  if (serial_edits_) {
+    ev.splits = SerialEvents::splits(*this, splits, stamps_, touched_);
+    ev.restores = SerialEvents::restores(*this, events_.restores, stamps_, touched_);
+  } else {
+    ev.splits = rounds_.apply(*this, splits, stamps_);
+    ev.restores = waves_.apply(*this, events_.restores, stamps_);
+    rounds_.touched(touched_), waves_.touched(touched_);
+  }
   // The ids, read off the candidates in event order: a split leaves its edge auxiliary, a
   // restore makes its auxiliary edge a mesh edge again, and nothing else changes either flag.
   // (A restore may free a candidate that did not split: hence the alive bit in the test.)
@@ -156,22 +162,18 @@ void FastSimulator::renew_normals() {
   normals_valid_ = true;
 }
 
-// The corners of the live changed triangles, each once (serial: a few tests a triangle, where a
-// parallel claim would cost an atomic exchange a corner).
+// The vertices of the pass's applied events, each once: the corners of its live changed
+// triangles (a split's i, j, l, r and n; a restore's i, j, l, r), listed by the events from
+// their own compact records rather than read back from each changed triangle (serial: a test a
+// vertex, where a parallel claim would cost an atomic exchange).
 void FastSimulator::collect_renewed_vertices() {
   const std::uint64_t pass = stamps_.pass();
-  const Triangles& T = topo_.T;
   vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
   renewed_.clear();
-  const std::vector<int>& changed = stamps_.changed();
-  for (std::size_t k = 0; k < changed.size(); ++k) {
-    if (k + kFar < changed.size()) prefetch_read(&T[changed[k + kFar]]), prefetch_read(&T.alive[changed[k + kFar]]);
-    if (k + kNear < changed.size())  // its face prefetched kFar on, so its corners' stamps kNear on
-      for (int v : T.corners(changed[k + kNear])) prefetch(&vertex_stamp_[v]);
-    const int t = changed[k];
-    if (!T.alive[t]) continue;
-    for (int v : T.corners(t))
-      if (vertex_stamp_[v] != pass) vertex_stamp_[v] = pass, renewed_.push_back(v);
+  for (std::size_t k = 0; k < touched_.size(); ++k) {
+    if (k + kNear < touched_.size()) prefetch(&vertex_stamp_[touched_[k + kNear]]);
+    const int v = touched_[k];
+    if (vertex_stamp_[v] != pass) vertex_stamp_[v] = pass, renewed_.push_back(v);
   }
 }
 

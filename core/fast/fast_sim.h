@@ -173,6 +173,7 @@ class FastSimulator final : public Simulator {
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
   Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
   std::vector<int> renewed_;              ///< the vertices whose normals this pass renews
+  std::vector<int> touched_;              ///< the applied events' vertices, in event order (repeats)
   /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
   /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.
   struct EventLists {

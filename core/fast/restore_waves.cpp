@@ -46,6 +46,12 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, Tr
   return int(freed_.size());
 }
 
+void RestoreWaves::touched(std::vector<int>& out) const {
+  for (const auto& f : freed_)
+    for (int q = 1; q < 5; ++q)  // verts[0] is n, released
+      if (const int v = candidates_[std::size_t(f.first)].verts[q]; v >= 0) out.push_back(v);
+}
+
 // Every candidate's answer on the state after the splits, in parallel. The stamps are the
 // splits' only: a restore's stamps matter to candidates that share its vertices, which wait for
 // a later wave and test again there.

@@ -31,6 +31,8 @@ class RestoreWaves {
   /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
   /// restores applied.
   int apply(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps);
+  /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
+  void touched(std::vector<int>& out) const;
   /// Waves so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_waves() const { return large_waves_; }
 

@@ -1,30 +1,43 @@
 #include "fast/serial_events.h"
 
 #include <algorithm>
+#include <array>
 
 #include "fast/fast_sim.h"
 
 namespace crumple::fast {
 
-int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
+namespace {
+void append_live(const std::array<int, 4>& k, std::vector<int>& touched) {
+  for (int v : k)
+    if (v >= 0) touched.push_back(v);
+}
+}  // namespace
+
+int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps, std::vector<int>& touched) {
   const Topology& m = sim.topo_;
   int done = 0;
   for (int e : splits) {
     if (stamps.touched(m.E[e].tri0) || stamps.touched(m.E[e].tri1)) continue;
     if (!sim.split_edge(e)) continue;
-    for (int t : m.records[m.E[e].record].t) stamps.mark(t);
+    const SplitRecord& r = m.records[m.E[e].record];
+    for (int t : r.t) stamps.mark(t);
+    append_live(r.k, touched);
+    touched.push_back(r.n);
     ++done;
   }
   return done;
 }
 
-int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps) {
+int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps,
+                           std::vector<int>& touched) {
   const Topology& m = sim.topo_;
   int done = 0;
   for (int e : restores) {
     const SplitRecord& r = m.records[m.E[e].record];
     if (std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); }) || !sim.can_restore(e)) continue;
     const auto t = r.t;
+    append_live(r.k, touched);
     sim.restore_edge(e);
     for (int q : t) stamps.mark(q);
     ++done;

@@ -89,6 +89,15 @@ void SplitRounds::make_room(FastSimulator& sim) {
   }
 }
 
+void SplitRounds::touched(std::vector<int>& out) const {
+  for (std::size_t k = 0; k < plans_.size(); ++k) {
+    if (!applied_[k]) continue;
+    for (int v : plans_[k].ends)
+      if (v >= 0) out.push_back(v);
+    out.push_back(plans_[k].n);
+  }
+}
+
 // The rounds, each a parallel loop over its splits (in event order within the round).
 int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
   const Topology& m = sim.topo_;

@@ -25,6 +25,8 @@ class SplitRounds {
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
   /// each accepted split changes in `stamps`. Returns the splits applied.
   int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
+  /// Appends the live vertices (i, j, l, r, n) of each split the last apply() applied.
+  void touched(std::vector<int>& out) const;
   /// Rounds so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_rounds() const { return large_rounds_; }
 
