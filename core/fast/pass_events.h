@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <vector>
 
 #include "fast/aligned.h"
 
@@ -39,10 +38,7 @@ class TriangleStamps {
  public:
   void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
   /// Starts a pass: no triangle is changed yet.
-  void begin_pass() {
-    ++pass_;
-    changed_.clear();
-  }
+  void begin_pass() { ++pass_; }
   std::uint64_t pass() const { return pass_; }
   /// Triangle t (-1: none) was changed by an accepted event of this pass.
   bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == pass_; }
@@ -53,17 +49,13 @@ class TriangleStamps {
     // by an eighth at once keeps the growth's fill off the per-split path (a stamp of 0 is an
     // untouched triangle, so slots past the mesh's are harmless).
     if (t >= int(stamp_.size())) stamp_.resize(std::max(std::size_t(t) + 1, stamp_.size() + stamp_.size() / 8), 0);
-    if (stamp_[t] != pass_) changed_.push_back(t);
     stamp_[t] = pass_;
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
   const std::uint64_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
-  /// The changed triangles, each once, in the order they were first marked.
-  const std::vector<int>& changed() const { return changed_; }
 
  private:
   Array<std::uint64_t> stamp_;  ///< pass that last changed each triangle
-  std::vector<int> changed_;
   std::uint64_t pass_ = 0;
 };
 
