@@ -1,8 +1,10 @@
 #include "fast/layout.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 #include <utility>
 
 namespace crumple::fast {
@@ -53,19 +55,25 @@ void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets
   });
 }
 
-/// Stable LSD radix sort of the slots 0..n-1 by code (11-bit digits over `bits`) into `order`.
+/// Most bits a radix pass sorts: its histograms (4096 counts a block) stay in L1.
+constexpr int kMaxDigit = 12;
+
+/// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits) into `order`, in as
+/// few passes of at most kMaxDigit bits as cover them (stable: the order is the same whatever
+/// the digits).
 void radix_order(const Parallel& par, LayoutScratch& s, int bits, std::vector<int>& order) {
   const int n = int(s.code.size());
   order.resize(n);
   s.idx.resize(n);
   s.code2.resize(n);
   for (int k = 0; k < n; ++k) order[k] = k;
-  constexpr int kDigit = 11;
-  constexpr std::uint64_t kMask = (std::uint64_t(1) << kDigit) - 1;
-  for (int shift = 0; shift < bits; shift += kDigit) {
+  const int passes = (bits + kMaxDigit - 1) / kMaxDigit;
+  const int digit_bits = (bits + passes - 1) / passes;
+  const std::uint64_t mask = (std::uint64_t(1) << digit_bits) - 1;
+  for (int shift = 0; shift < bits; shift += digit_bits) {
     const std::uint64_t* code = s.code.data();
-    auto digit = [&](int k) { return int((code[k] >> shift) & kMask); };
-    stable_pass(par, s.count, n, 1 << kDigit, digit, [&](int k, int to) {
+    auto digit = [&](int k) { return int((code[k] >> shift) & mask); };
+    stable_pass(par, s.count, n, 1 << digit_bits, digit, [&](int k, int to) {
       s.code2[to] = code[k];
       s.idx[to] = order[k];
     });
@@ -100,35 +108,70 @@ template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
 template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
 template <> Array<Face>& spare(LayoutScratch& s) { return s.spare_faces; }
 
-/// a[new] = f(a[order[new]]): gathered into the spare buffer, which then swaps with a (keeping
-/// a's reserved room).
+/// One array of a permutation group: a[new] = rename(a[order[new]], order[new]).
 template <class T, class F>
-void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order, F f) {
-  Array<T>& out = spare<T>(s);
-  if (out.capacity() < a.capacity()) out.reserve(a.capacity());
-  out.resize(a.size());
-  const T* src = a.data();
-  T* dst = out.data();
-  par.run(int(order.size()), kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      // The sources are scattered (new elements sit at the end until a relayout): fetch them
-      // ahead. Not the renaming tables' entries: prefetching those too made it slower
-      // (docs/PERFORMANCE.md).
-      if (k + kAhead < e) __builtin_prefetch(&src[order[k + kAhead]]);
-      dst[k] = f(src[order[k]]);
-    }
-  });
-  a.swap(out);
+struct Gathered {
+  using value_type = T;
+  Array<T>& a;
+  F rename;
+  const T* src = nullptr;
+  T* dst = nullptr;
+};
+template <class T, class F>
+Gathered<T, F> gathered(Array<T>& a, F rename) {
+  return {a, rename};
 }
 template <class T>
-void permute(const Parallel& par, LayoutScratch& s, Array<T>& a, const std::vector<int>& order) {
-  permute(par, s, a, order, [](const T& v) { return v; });
+auto gathered(Array<T>& a) {
+  return gathered(a, [](const T& v, int) { return v; });
+}
+
+template <class T, class... U>
+constexpr bool kDistinct = (!std::is_same_v<T, U> && ...) && kDistinct<U...>;
+template <class T>
+constexpr bool kDistinct<T> = true;
+
+/// Readies g to gather into its type's spare buffer (of a's size and at least a's room).
+template <class G>
+void ready(LayoutScratch& s, G& g) {
+  auto& out = spare<typename G::value_type>(s);
+  if (out.capacity() < g.a.capacity()) out.reserve(g.a.capacity());
+  out.resize(g.a.size());
+  g.src = g.a.data(), g.dst = out.data();
+}
+
+/// Gathers every array of one group in the new order, in one loop over `order` (one read of
+/// the order and one loop for all of them). Each array gathers into the spare buffer of its
+/// element type (hence distinct types within a group), which then swaps with it, keeping the
+/// array's reserved room.
+template <class... G>
+void permute(const Parallel& par, LayoutScratch& s, const std::vector<int>& order, G... g) {
+  static_assert(kDistinct<typename G::value_type...>, "one spare buffer per element type");
+  (ready(s, g), ...);
+  par.run(int(order.size()), kGrain, [&](int b, int e) {
+    const int* __restrict o = order.data();
+    auto copy = [&](int k) {
+      const int from = o[k];
+      ((g.dst[k] = g.rename(g.src[from], from)), ...);
+    };
+    // The sources are scattered (new elements sit at the end until a relayout): fetch them
+    // kAhead on. Not the renaming tables' entries: prefetching those too made it slower
+    // (docs/PERFORMANCE.md).
+    const int ahead = std::max(b, e - kAhead);
+    for (int k = b; k < ahead; ++k) {
+      const int next = o[k + kAhead];
+      (__builtin_prefetch(&g.src[next]), ...);
+      copy(k);
+    }
+    for (int k = ahead; k < e; ++k) copy(k);
+  });
+  (g.a.swap(spare<typename G::value_type>(s)), ...);
 }
 
 /// Repacks one adjacency pool (list) and its parallel pool in the new vertex order: the vertex
 /// now in slot k (heads already permuted) gets a block of room_for(count) entries, the blocks
 /// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
-/// left. f and g rename the entries of list and parallel.
+/// left. f and g rename the entries of list and parallel; both pools are copied in one loop.
 template <class F, class G>
 void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Array<std::int32_t>& parallel,
             Array<ListHead>& heads, F f, G g) {
@@ -142,34 +185,51 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
     h.at = std::int32_t(total);
     total += h.room;
   }
-  auto copy = [&](Array<std::int32_t>& pool, auto rename) {
-    Array<std::int32_t>& out = spare<std::int32_t>(s);
+  auto ready_pool = [&](Array<std::int32_t>& out, const Array<std::int32_t>& pool) {
     if (out.capacity() < pool.capacity()) out.reserve(pool.capacity());
     out.resize(std::size_t(total));
-    const std::int32_t* src = pool.data();
-    std::int32_t* dst = out.data();
-    par.run(n, kGrain, [&](int b, int e) {
-      for (int k = b; k < e; ++k) {
-        if (k + kAhead < e) __builtin_prefetch(&src[s.at_old[k + kAhead]]);
-        for (int w = 0; w < heads[k].count; ++w) dst[heads[k].at + w] = rename(src[s.at_old[k] + w]);
-      }
-    });
-    pool.swap(out);
+    return out.data();
   };
-  copy(list, f);
-  copy(parallel, g);
+  std::int32_t* __restrict to_list = ready_pool(s.spare_i, list);
+  std::int32_t* __restrict to_parallel = ready_pool(s.spare_i2, parallel);
+  const std::int32_t* __restrict from_list = list.data();
+  const std::int32_t* __restrict from_parallel = parallel.data();
+  const ListHead* __restrict head = heads.data();
+  const std::int32_t* __restrict at_old = s.at_old.data();
+  par.run(n, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      if (k + kAhead < e) __builtin_prefetch(&from_list[at_old[k + kAhead]]), __builtin_prefetch(&from_parallel[at_old[k + kAhead]]);
+      const int from = at_old[k], to = head[k].at, count = head[k].count;
+      for (int w = 0; w < count; ++w) {
+        to_list[to + w] = f(from_list[from + w]);
+        to_parallel[to + w] = g(from_parallel[from + w]);
+      }
+    }
+  });
+  list.swap(s.spare_i);
+  parallel.swap(s.spare_i2);
 }
 
 /// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
 void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int n = V.size();
+  // The bounds of the live rest positions, per fixed block (min and max: the same on any
+  // thread count); a dead slot's bounds are +inf / -inf, which no live one loses to.
+  std::vector<std::array<float, 6>> bounds(std::size_t(Parallel::blocks_of(n, kGrain)));
+  par.run_blocks(n, kGrain, [&](int b, int begin, int end) {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int v = begin; v < end; ++v) {
+      const Float4 X = V.rest[v];
+      const bool live = V.mass(v) > 0;
+      const float r[3] = {X.x, X.y, X.z};
+      for (int d = 0; d < 3; ++d)
+        lo[d] = std::min(lo[d], live ? r[d] : INFINITY), hi[d] = std::max(hi[d], live ? r[d] : -INFINITY);
+    }
+    bounds[b] = {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+  });
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (int v = 0; v < n; ++v) {
-    if (!(V.mass(v) > 0)) continue;
-    const Float4 X = V.rest[v];
-    const float r[3] = {X.x, X.y, X.z};
-    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], r[d]), hi[d] = std::max(hi[d], r[d]);
-  }
+  for (const auto& q : bounds)
+    for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], q[d]), hi[d] = std::max(hi[d], q[3 + d]);
   // Resolution: a sheet of n vertices has about sqrt(n) per axis; four times that per axis.
   const int bits = std::clamp(int(std::ceil(std::log2(std::max(n, 2)) / 2)) + 2, 4, 21);
   const double extent = std::max({double(hi[0]) - lo[0], double(hi[1]) - lo[1], double(hi[2]) - lo[2], 1e-30});
@@ -214,6 +274,7 @@ LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2, at_old = o.at_old;
   copy_warm(spare_heads, o.spare_heads);
   copy_warm(spare_i, o.spare_i);
+  copy_warm(spare_i2, o.spare_i2);
   copy_warm(spare_u8, o.spare_u8);
   copy_warm(spare_f4, o.spare_f4);
   copy_warm(spare_edges, o.spare_edges);
@@ -256,9 +317,11 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
   // next step before anything reads them), then the adjacency lists with their entries renamed.
-  for (Array<Float4>* a : {&V.xm, &V.vm, &V.nr, &V.rest}) permute(par, s, *a, vorder);
-  for (Array<ListHead>* a : {&V.spring_list, &V.tri_list}) permute(par, s, *a, vorder);
-  permute(par, s, V.lid, vorder);
+  // Groups of distinct element types (one spare buffer per type).
+  permute(par, s, vorder, gathered(V.xm), gathered(V.spring_list), gathered(V.lid));
+  permute(par, s, vorder, gathered(V.vm), gathered(V.tri_list));
+  permute(par, s, vorder, gathered(V.nr));
+  permute(par, s, vorder, gathered(V.rest));
   repack(par, s, V.springs, V.nbrs, V.spring_list, [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); },
          vmap);
   repack(par, s, V.tris, V.wings, V.tri_list, [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, emap);
@@ -266,27 +329,27 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 
   // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
   // itself, as the topology's convention says.
-  permute(par, s, E.slots, eorder, [&](EdgeRecord r) {
-    if (r.flags & kAlive) r.a = vmap(r.a), r.b = vmap(r.b);
-    else r.a = r.b = 0;
-    r.wl = vmap(r.wl), r.wr = vmap(r.wr), r.tri0 = tmap(r.tri0), r.tri1 = tmap(r.tri1);
-    return r;
-  });
-  permute(par, s, E.lid, eorder);
+  permute(par, s, eorder,
+          gathered(E.slots,
+                   [&](EdgeRecord r, int) {
+                     if (r.flags & kAlive) r.a = vmap(r.a), r.b = vmap(r.b);
+                     else r.a = r.b = 0;
+                     r.wl = vmap(r.wl), r.wr = vmap(r.wr), r.tri0 = tmap(r.tri0), r.tri1 = tmap(r.tri1);
+                     return r;
+                   }),
+          gathered(E.lid));
 
-  // Triangles (dead ones keep corners 0 and no edges).
+  // Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
+  // per-step values that compute_normals writes for every slot before anything reads them.
   const std::uint8_t* old_alive = T.alive.data();
-  permute(par, s, T.slots, torder, [&](Face f) {
-    for (int k = 0; k < 3; ++k) f.v[k] = std::int32_t(vnew[f.v[k]]), f.e[k] = emap(f.e[k]);
-    return f;
-  });
-  par.run(nt, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k)
-      if (!old_alive[torder[k]]) T[k].v = kNoFace.v;
-  });
-  permute(par, s, T.area, torder);
-  permute(par, s, T.lid, torder);
-  permute(par, s, T.alive, torder);  // last: read above
+  permute(par, s, torder,
+          gathered(T.slots,
+                   [&](Face f, int from) {
+                     const bool alive = old_alive[from];
+                     for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = emap(f.e[k]);
+                     return f;
+                   }),
+          gathered(T.lid), gathered(T.alive));
 
   // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
   par.run(int(m.records.size()), kGrain, [&](int b, int e) {

@@ -24,8 +24,9 @@
 namespace crumple::fast {
 
 /// The memory relayout reuses from one call to the next (index maps, sort keys, one spare
-/// buffer per element type that each permuted array is gathered into and swapped with), so
-/// that a relayout allocates nothing, and takes no page fault, once warm.
+/// buffer per element type that each permuted array is gathered into and swapped with, and a
+/// second one for the adjacency pools, which are repacked in pairs), so that a relayout
+/// allocates nothing, and takes no page fault, once warm.
 struct LayoutScratch {
   LayoutScratch() = default;
   /// A copy (a clone of the simulator) gets spare buffers of the same room, already touched,
@@ -37,7 +38,7 @@ struct LayoutScratch {
   std::vector<std::int32_t> at_old;  ///< each vertex's old block start, by new slot (repacking)
   std::vector<std::uint64_t> code, code2;
   Array<ListHead> spare_heads;
-  Array<std::int32_t> spare_i;
+  Array<std::int32_t> spare_i, spare_i2;
   Array<std::uint8_t> spare_u8;
   Array<Float4> spare_f4;
   Array<EdgeRecord> spare_edges;
