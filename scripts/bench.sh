@@ -33,24 +33,21 @@ while (($#)); do
 done
 
 "$root/scripts/install_deps.sh"
+# shellcheck source=scripts/bench_build.sh
+source "$root/scripts/bench_build.sh"
 # The revision measured, taken before the run writes its results (they are tracked files, so a
 # label taken afterwards would always read -dirty).
 rev=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
 
 build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCRUMPLE_BUILD_BENCH=ON \
-      -DCRUMPLE_BUILD_TESTS=OFF > "$build.cmake.log" 2>&1 || { cat "$build.cmake.log"; exit 1; }
-cmake --build "$build" -j "$(nproc)" --target crumple_bench
+build_bench "$build" crumple_bench
 bin=$build/bench/crumple_bench
 # The same kernels without vectorization (CRUMPLE_DISABLE_SIMD): its fast backend is labelled
 # fast-nosimd, so the report shows scalar -> SIMD -> two threads from one run.
 nosimd_build=${build}-nosimd
 echo "bench.sh: building the no-SIMD variant in $nosimd_build"
-cmake -S "$root" -B "$nosimd_build" -DCMAKE_BUILD_TYPE=Release -DCRUMPLE_BUILD_BENCH=ON \
-      -DCRUMPLE_BUILD_TESTS=OFF -DCRUMPLE_DISABLE_SIMD=ON > "$nosimd_build.cmake.log" 2>&1 \
-  || { cat "$nosimd_build.cmake.log"; exit 1; }
-cmake --build "$nosimd_build" -j "$(nproc)" --target crumple_bench
+build_bench "$nosimd_build" crumple_bench -DCRUMPLE_DISABLE_SIMD=ON
 nosimd_bin=$nosimd_build/bench/crumple_bench
 
 tag=$("$py" "$root/scripts/machine_info.py" --tag)

@@ -1,0 +1,128 @@
+// crumple_layout_probe: what the fast backend's layout fraction (FastSimulator::
+// set_layout_fraction, layout.h) costs and saves in the paper's crumple. From the benchmarks'
+// prepared state (bench_frame.cpp: the paper's configuration at 0.6 x sphere_time), each run
+// clones it, sets one fraction, runs one untimed warm-up frame and times FRAMES frames; the runs
+// of one round take the fractions in a rotated order, so that every fraction meets the machine's
+// load at every position. Per run: the mean frame, each pass's share of it (the passes'
+// own timers), the relayouts and the longest one (a frame that relayouts is that much longer:
+// the hitch an engine sees). The summary gives per fraction the medians over the rounds.
+// Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fast/fast_sim.h"
+#include "mesh/input_mesh.h"
+#include "model/params.h"
+#include "sim/run.h"
+
+namespace {
+
+using crumple::fast::FastSimulator;
+using crumple::fast::Pass;
+
+struct RunResult {
+  double frame_ms = 0;                          ///< mean over the timed frames
+  double pass_ms[int(Pass::kCount)] = {};       ///< each pass's mean per frame
+  int relayouts = 0;
+  double longest_relayout_ms = 0;
+};
+
+/// Parses a whole decimal integer or number, or exits with a one-line error naming it.
+double number(const char* text, const char* what, bool integer) {
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v) || (integer && v != std::floor(v))) {
+    std::fprintf(stderr, "crumple_layout_probe: %s must be %s, got '%s'\n", what, integer ? "an integer" : "a number", text);
+    std::exit(2);
+  }
+  return v;
+}
+
+RunResult run(const FastSimulator& prepared, const crumple::Params& params, int first_frame, int frames, double fraction) {
+  std::unique_ptr<crumple::Simulator> clone = prepared.clone();
+  auto& sim = static_cast<FastSimulator&>(*clone);
+  sim.set_layout_fraction(fraction);
+  crumple::run_frame(sim, params, first_frame);  // warm-up, untimed
+  RunResult r;
+  const auto before = sim.pass_seconds();
+  double seconds = 0;
+  for (int f = 1; f <= frames; ++f) {
+    const double layout_before = sim.pass_seconds()[int(Pass::Layout)];
+    const auto t0 = std::chrono::steady_clock::now();
+    crumple::run_frame(sim, params, first_frame + f);
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double layout = sim.pass_seconds()[int(Pass::Layout)] - layout_before;
+    if (layout > 0) ++r.relayouts, r.longest_relayout_ms = std::max(r.longest_relayout_ms, 1e3 * layout);
+  }
+  r.frame_ms = 1e3 * seconds / frames;
+  for (int k = 0; k < int(Pass::kCount); ++k) r.pass_ms[k] = 1e3 * (sim.pass_seconds()[k] - before[k]) / frames;
+  return r;
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) {
+    std::fprintf(stderr, "usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]\n");
+    return 2;
+  }
+  const int n = int(number(argv[1], "N", true)), threads = int(number(argv[2], "THREADS", true));
+  const int frames = int(number(argv[3], "FRAMES", true)), rounds = int(number(argv[4], "ROUNDS", true));
+  if (n < 4 || threads < 1 || frames < 1 || rounds < 1) {
+    std::fprintf(stderr, "crumple_layout_probe: N must be >= 4 and THREADS, FRAMES, ROUNDS >= 1\n");
+    return 2;
+  }
+  std::vector<double> fractions;
+  for (int a = 5; a < argc; ++a) fractions.push_back(number(argv[a], "FRACTION", false));
+
+  const crumple::Params params = crumple::paper_params();
+  FastSimulator prepared(crumple::make_grid(n), params, threads);
+  const int prep_frames = int(std::lround(0.6 * params.sphere_time / params.frame_dt));
+  for (int f = 1; f <= prep_frames; ++f) crumple::run_frame(prepared, params, f);
+  std::printf("N = %d, %d thread(s), %d vertices at frame %d; %d timed frames a run\n", n, threads,
+              prepared.totals().vertices, prep_frames, frames);
+
+  std::map<double, std::vector<RunResult>> results;
+  const int nf = int(fractions.size());
+  for (int round = 0; round < rounds; ++round) {
+    for (int k = 0; k < nf; ++k) {
+      const double fraction = fractions[(k + round) % nf];
+      const RunResult r = run(prepared, params, prep_frames + 1, frames, fraction);
+      results[fraction].push_back(r);
+      std::printf("round %d, fraction %g: frame %.2f ms, %d relayouts (longest %.1f ms) |", round + 1, fraction,
+                  r.frame_ms, r.relayouts, r.longest_relayout_ms);
+      for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %s %.2f", to_string(Pass(p)), r.pass_ms[p]);
+      std::printf("\n");
+      std::fflush(stdout);
+    }
+  }
+  std::printf("\nmedians over %d rounds (ms a frame; relayout: the longest of a run)\n", rounds);
+  std::printf("%-9s %8s %9s %10s", "fraction", "frame", "relayouts", "relayout");
+  for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14s", to_string(Pass(p)));
+  std::printf("\n");
+  for (const auto& [fraction, runs] : results) {
+    auto med = [&](auto get) {
+      std::vector<double> v;
+      for (const RunResult& r : runs) v.push_back(get(r));
+      return median(v);
+    };
+    std::printf("%-9g %8.2f %9.1f %10.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
+                med([](const RunResult& r) { return double(r.relayouts); }),
+                med([](const RunResult& r) { return r.longest_relayout_ms; }));
+    for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14.2f", med([&](const RunResult& r) { return r.pass_ms[p]; }));
+    std::printf("\n");
+  }
+  return 0;
+}
