@@ -32,14 +32,9 @@ while (($#)); do
   shift
 done
 
-"$root/scripts/install_deps.sh"
 # shellcheck source=scripts/bench_build.sh
 source "$root/scripts/bench_build.sh"
-# The revision measured, taken before the run writes its results (they are tracked files, so a
-# label taken afterwards would always read -dirty).
-rev=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
-
-build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
+bench_setup
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
 build_bench "$build" crumple_bench
 bin=$build/bench/crumple_bench

@@ -24,11 +24,9 @@ while (($#)); do
   shift
 done
 
-"$root/scripts/install_deps.sh"
 # shellcheck source=scripts/bench_build.sh
 source "$root/scripts/bench_build.sh"
-rev=$(git -C "$root" describe --always --dirty 2>/dev/null || echo unknown)
-build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
+bench_setup
 build_bench "$build" crumple_layout_probe
 probe=$build/bench/crumple_layout_probe
 
