@@ -203,6 +203,48 @@ TEST(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
   }
 }
 
+// The fracture and restoration test runs in fixed blocks on any thread (adapt_decide): a
+// decision must not depend on the range that made it, and no range may write a byte outside
+// itself (another thread's block: a race even where it writes the right value; a kernel that
+// pads its last lanes, as an eight-lane version of it did, must not store them). Both kinds of decision
+// must occur: a huge budget breaks every compressed mesh edge that can, an epsilon of 0 restores
+// every crease. Both P_step forms: the exact one (step_exponent 1) and the pow.
+TEST(AdaptTest, ADecisionDoesNotDependOnItsRangeAndNoRangeWritesOutsideItself) {
+  fast::FastSimulator sim(make_grid(12), Params{}, 1);
+  for (int s = 0; s < 40; ++s) sim.step();  // a crumpled state with splits and auxiliary edges
+  fast::Topology m = sim.topology();
+  for (int v = 0; v < m.V.size(); ++v) {  // shrunk by a tenth: nearly every edge compressed
+    fast::Float4& x = m.V.xm[v];
+    x = fast::Float4{0.9f * x.x, 0.9f * x.y, 0.9f * x.z, x.w};
+  }
+  fast::triangle_areas(m, 1.0f, m.T.area.data(), 0, m.T.size());
+  fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
+  const int n = m.E.size();
+  for (const float exponent : {1.0f, 0.25f}) {
+    fast::AdaptConstants c;
+    c.phi = 0.75f, c.epsilon = 0.0f, c.floor_length = 0.0f, c.step_exponent = exponent, c.budget = 1e3f;
+    c.seed = 7, c.step = 40;
+    std::vector<std::uint8_t> whole(std::size_t(n), 9), out(whole.size());
+    fast::adapt_test(m, c, whole.data(), 0, n);
+    const auto count = [&](std::uint8_t d) { return std::count(whole.begin(), whole.end(), d); };
+    ASSERT_GT(count(1), 10) << "exponent " << exponent;
+    ASSERT_GT(count(2), 10) << "exponent " << exponent;
+    ASSERT_EQ(count(1) + count(2) + count(0), n);  // every edge decided
+    // Each part alone into a buffer of 9s: its own bytes are the whole range's, the rest still 9.
+    auto part = [&](int begin, int end) {
+      std::vector<std::uint8_t> expected(whole.size(), 9);
+      std::copy(whole.begin() + begin, whole.begin() + end, expected.begin() + begin);
+      std::fill(out.begin(), out.end(), std::uint8_t(9));
+      fast::adapt_test(m, c, out.data(), begin, end);
+      return out == expected;
+    };
+    for (int split = 1; split < 20; ++split) {
+      EXPECT_TRUE(part(split, n)) << "exponent " << exponent << ", [" << split << ", n)";
+      EXPECT_TRUE(part(0, split)) << "exponent " << exponent << ", [0, " << split << ")";
+    }
+  }
+}
+
 /// Asserts two runs had the same events frame by frame, and totals them.
 void same_events(const std::vector<StepEvents>& a, const std::vector<StepEvents>& b, long& splits, long& restores) {
   for (std::size_t f = 0; f < a.size(); ++f) {
