@@ -157,7 +157,8 @@ struct Edges {
 struct Triangles {
   Array<Face> slots;               ///< corners and sides of each slot (kNoFace when dead)
   Array<std::uint8_t> alive;       ///< 1: in use
-  Array<Float4> area;              ///< per-step area vector (twice the area times the normal)
+  Array<Float4> area;              ///< per-step area vector (twice the area times the normal); compute_normals
+                                   ///< writes every slot's before a read, so relayout leaves it where it is
   Array<std::int32_t> lid;         ///< logical id of each slot
   Array<std::int32_t> phys;        ///< slot of each logical id
   std::vector<int> free_ids;       ///< LIFO free list of logical ids
