@@ -6,7 +6,7 @@
 #
 # Usage: scripts/layout_probe.sh [--out FILE] [--sizes "128 256 512"] [--threads "1 2"]
 #                                [--frames 52] [--rounds 3] [--fractions "0.25 0.15 0.1 0.06"]
-# Takes about 15 minutes with the defaults on a 2-core VM.
+# Took 10 minutes with the defaults on the 2-vCPU Intel VM.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 py=/usr/bin/python3  # the python3 first on PATH may lack what machine_info.py imports
@@ -18,7 +18,7 @@ while (($#)); do
       (($# >= 2)) || { echo "layout_probe.sh: $1 needs a value" >&2; exit 2; }
       declare "${1#--}=$2"
       shift ;;
-    -h | --help) sed -n '2,10p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,9p' "$0"; exit 0 ;;
     *) echo "layout_probe.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
   shift
