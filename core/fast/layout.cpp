@@ -131,13 +131,20 @@ constexpr bool kDistinct = (!std::is_same_v<T, U> && ...) && kDistinct<U...>;
 template <class T>
 constexpr bool kDistinct<T> = true;
 
-/// Readies g to gather into its type's spare buffer (of a's size and at least a's room).
+/// Readies a spare buffer to receive n elements gathered from `from` and then to swap with it:
+/// at least from's room, so the swap keeps the array's reserved room.
+template <class T>
+T* ready_spare(Array<T>& out, const Array<T>& from, std::size_t n) {
+  if (out.capacity() < from.capacity()) out.reserve(from.capacity());
+  out.resize(n);
+  return out.data();
+}
+
+/// Readies g to gather into its type's spare buffer.
 template <class G>
 void ready(LayoutScratch& s, G& g) {
-  auto& out = spare<typename G::value_type>(s);
-  if (out.capacity() < g.a.capacity()) out.reserve(g.a.capacity());
-  out.resize(g.a.size());
-  g.src = g.a.data(), g.dst = out.data();
+  g.src = g.a.data();
+  g.dst = ready_spare(spare<typename G::value_type>(s), g.a, g.a.size());
 }
 
 /// Gathers every array of one group in the new order, in one loop over `order` (one read of
@@ -185,13 +192,8 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
     h.at = std::int32_t(total);
     total += h.room;
   }
-  auto ready_pool = [&](Array<std::int32_t>& out, const Array<std::int32_t>& pool) {
-    if (out.capacity() < pool.capacity()) out.reserve(pool.capacity());
-    out.resize(std::size_t(total));
-    return out.data();
-  };
-  std::int32_t* __restrict to_list = ready_pool(s.spare_i, list);
-  std::int32_t* __restrict to_parallel = ready_pool(s.spare_i2, parallel);
+  std::int32_t* __restrict to_list = ready_spare(s.spare_i, list, std::size_t(total));
+  std::int32_t* __restrict to_parallel = ready_spare(s.spare_i2, parallel, std::size_t(total));
   const std::int32_t* __restrict from_list = list.data();
   const std::int32_t* __restrict from_parallel = parallel.data();
   const ListHead* __restrict head = heads.data();

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <vector>
 
 #include "fast/aligned.h"
 
@@ -31,6 +32,14 @@ struct SplitPlan {
   std::array<int, 2> tris{-1, -1};           ///< (n,j,l), (n,i,r)
   int record = -1;                           ///< the split record
 };
+
+/// Appends the vertices of [first, last) that exist (>= 0): an applied event's vertices, for
+/// the normal renewal.
+template <class It>
+void append_live(It first, It last, std::vector<int>& out) {
+  for (; first != last; ++first)
+    if (*first >= 0) out.push_back(*first);
+}
 
 /// The triangles changed by the accepted events of the current pass. Pass numbers, not flags:
 /// a new pass forgets the last one's marks without clearing an array the size of the mesh.

@@ -47,9 +47,10 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, Tr
 }
 
 void RestoreWaves::touched(std::vector<int>& out) const {
-  for (const auto& f : freed_)
-    for (int q = 1; q < 5; ++q)  // verts[0] is n, released
-      if (const int v = candidates_[std::size_t(f.first)].verts[q]; v >= 0) out.push_back(v);
+  for (const auto& f : freed_) {
+    const auto& verts = candidates_[std::size_t(f.first)].verts;
+    append_live(verts.begin() + 1, verts.end(), out);  // verts[0] is n, released
+  }
 }
 
 // Every candidate's answer on the state after the splits, in parallel. The stamps are the

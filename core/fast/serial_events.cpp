@@ -1,18 +1,10 @@
 #include "fast/serial_events.h"
 
 #include <algorithm>
-#include <array>
 
 #include "fast/fast_sim.h"
 
 namespace crumple::fast {
-
-namespace {
-void append_live(const std::array<int, 4>& k, std::vector<int>& touched) {
-  for (int v : k)
-    if (v >= 0) touched.push_back(v);
-}
-}  // namespace
 
 int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps, std::vector<int>& touched) {
   const Topology& m = sim.topo_;
@@ -22,7 +14,7 @@ int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, Tri
     if (!sim.split_edge(e)) continue;
     const SplitRecord& r = m.records[m.E[e].record];
     for (int t : r.t) stamps.mark(t);
-    append_live(r.k, touched);
+    append_live(r.k.begin(), r.k.end(), touched);
     touched.push_back(r.n);
     ++done;
   }
@@ -37,7 +29,7 @@ int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores,
     const SplitRecord& r = m.records[m.E[e].record];
     if (std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); }) || !sim.can_restore(e)) continue;
     const auto t = r.t;
-    append_live(r.k, touched);
+    append_live(r.k.begin(), r.k.end(), touched);
     sim.restore_edge(e);
     for (int q : t) stamps.mark(q);
     ++done;

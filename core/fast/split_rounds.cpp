@@ -92,8 +92,7 @@ void SplitRounds::make_room(FastSimulator& sim) {
 void SplitRounds::touched(std::vector<int>& out) const {
   for (std::size_t k = 0; k < plans_.size(); ++k) {
     if (!applied_[k]) continue;
-    for (int v : plans_[k].ends)
-      if (v >= 0) out.push_back(v);
+    append_live(plans_[k].ends.begin(), plans_[k].ends.end(), out);
     out.push_back(plans_[k].n);
   }
 }
