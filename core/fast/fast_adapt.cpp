@@ -4,8 +4,10 @@
 // with the serial result of serial_events.h), then the areas and normals renewed where
 // triangles changed. One event's edits are in fast_edits.cpp.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 #if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
 #include <immintrin.h>
@@ -29,6 +31,7 @@ static_assert(kTestBlock % Parallel::kLanes == 0);
 constexpr int kRenewGrain = 512;  ///< a normal per vertex: far less than an event
 
 constexpr int kSkip = 64;  ///< decisions tested at once: one line
+constexpr int kIdDigit = 11;  ///< bits an event-id radix pass sorts: its 2,048 counts stay in L1
 
 /// Whether the kSkip bytes at p are all 0.
 inline bool all_zero(const std::uint8_t* p) {
@@ -60,6 +63,23 @@ void for_each_nonzero(const std::uint8_t* bytes, int begin, int end, F&& f) {
   }
 }
 
+/// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
+/// digit radix passes of at most kIdDigit bits between keys and spare: a few streaming passes
+/// where a comparison sort of the step's thousands of keys costs a dozen compares a key.
+void sort_by_id(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& spare, std::vector<int>& count, int id_bits) {
+  const int passes = std::max(1, (id_bits + kIdDigit - 1) / kIdDigit);
+  const int digit_bits = (id_bits + passes - 1) / passes;
+  const std::uint64_t mask = (std::uint64_t(1) << digit_bits) - 1;
+  spare.resize(keys.size());
+  for (int shift = 32; shift < 32 + passes * digit_bits; shift += digit_bits) {
+    count.assign(std::size_t(1) << digit_bits, 0);
+    for (std::uint64_t k : keys) ++count[(k >> shift) & mask];
+    int sum = 0;
+    for (int& c : count) sum += std::exchange(c, sum);
+    for (std::uint64_t k : keys) spare[std::size_t(count[(k >> shift) & mask]++)] = k;
+    keys.swap(spare);
+  }
+}
 }  // namespace
 
 void FastSimulator::adapt_decide() {
@@ -127,15 +147,16 @@ StepEvents FastSimulator::adapt_apply() {
 
 void FastSimulator::collect_events() {
   // The events apply in ascending logical edge id (the order of MODEL.md §4 and of the
-  // reference): each kind's keys from every block, sorted (ids are unique, so the order is
+  // reference): each kind's keys from every block, sorted by id (ids are unique, so the order is
   // total). A pending event's edge keeps its slot through the pass: splits free no edge, and
   // restores free only mesh edges, never a pending (auxiliary) one.
   EventLists& s = events_;
+  const int id_bits = std::bit_width(unsigned(topo_.E.phys.size()));
   for (int kind : {0, 1}) {
     s.keys.clear();
     for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2)
       s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
-    std::sort(s.keys.begin(), s.keys.end());
+    sort_by_id(s.keys, s.spare, s.count, id_bits);
     std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
     slots.resize(s.keys.size());
     for (std::size_t k = 0; k < s.keys.size(); ++k) slots[k] = int(std::uint32_t(s.keys[k]));

@@ -179,6 +179,8 @@ class FastSimulator final : public Simulator {
   struct EventLists {
     std::vector<std::vector<std::uint64_t>> found;  ///< keys per block of adapt_test and kind, in slot order
     std::vector<std::uint64_t> keys;                ///< one kind's keys, sorted
+    std::vector<std::uint64_t> spare;               ///< the keys' other buffer while they are sorted
+    std::vector<int> count;                         ///< the sort's digit counts
     std::vector<int> splits, restores;              ///< event slots in event order
   };
   EventLists events_;
