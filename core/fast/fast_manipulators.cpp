@@ -95,13 +95,15 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
     normals_valid_ = true;
   }
   const Vertices& V = topo_.V;
-  out.positions.assign(3 * std::size_t(V.size()), 0.0f);
-  out.normals.assign(3 * std::size_t(V.size()), 0.0f);
+  // Every id is one slot's, so the loop writes every entry (a free id's as zeros): the buffers
+  // are resized, not cleared first (a serial fill of both, every frame, that the loop rewrites).
+  out.positions.resize(3 * std::size_t(V.size()));
+  out.normals.resize(3 * std::size_t(V.size()));
   par_.run(V.size(), kPassGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
-      if (!(V.mass(v) > 0)) continue;
+      const bool live = V.mass(v) > 0;
       const std::size_t id = std::size_t(V.lid[v]);
-      const Float4 p = V.xm[v], nv = V.nr[v];
+      const Float4 p = live ? V.xm[v] : Float4{}, nv = live ? V.nr[v] : Float4{};
       float* x = &out.positions[3 * id];
       float* n = &out.normals[3 * id];
       x[0] = p.x, x[1] = p.y, x[2] = p.z;

@@ -348,22 +348,35 @@ TEST(FastTotals, AreSumsInLogicalOrderWhereverTheSlotsAre) {
 // The render buffers (fast_manipulators.cpp: vertices copied in slot order to their ids'
 // places, triangles in fixed blocks of ids, each block written at its offset) are the snapshot's
 // vertices and live triangles in id order, with slots moved by relayouts, freed ids in the state
-// and over two blocks of triangle ids. Catches a vertex written at its slot instead of its id, a
-// dead triangle emitted, and blocks out of order or at overlapping offsets.
+// and over two blocks of triangle ids, into buffers that an earlier frame filled (a caller
+// reuses them) while a vertex id was live that is free now. Catches a vertex written at its slot
+// instead of its id, a free id left with the earlier frame's position or normal, a dead
+// triangle emitted, and blocks out of order or at overlapping offsets.
 TEST(FastRender, BuffersAreTheSnapshotInIdOrder) {
   Params p = churn_params();
   fast::FastSimulator sim(make_grid(72), p, 2);  // 10,082 triangles: two blocks of 8,192 ids
   sim.set_layout_fraction(0);
+  RenderBuffers r;
+  std::vector<bool> live_then;
   long restores = 0;
-  for (int step = 0; step < 40; ++step) restores += sim.step().restores;
+  for (int step = 0; step < 40; ++step) {
+    restores += sim.step().restores;
+    if (step == 20) sim.render(r, true), live_then = sim.snapshot().vertex_alive;
+  }
   ASSERT_GT(restores, 20);
   ASSERT_FALSE(sim.topology().T.free_ids.empty());
-  RenderBuffers r;
+  const std::vector<int>& free_now = sim.topology().V.free_ids;
+  ASSERT_TRUE(std::any_of(free_now.begin(), free_now.end(), [&](int id) { return id < int(live_then.size()) && live_then[id]; }));
   sim.render(r, true);
   const Snapshot s = sim.snapshot();
+  const std::vector<Vec3d> normals = sim.normals();
   ASSERT_EQ(r.positions.size(), 3 * s.position.size());
+  ASSERT_EQ(r.normals.size(), 3 * s.position.size());
   for (std::size_t k = 0; k < s.position.size(); ++k)
-    for (int c = 0; c < 3; ++c) ASSERT_EQ(r.positions[3 * k + c], float(s.position[k][c])) << k;
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(r.positions[3 * k + c], float(s.position[k][c])) << k;
+      ASSERT_EQ(r.normals[3 * k + c], s.vertex_alive[k] ? float(normals[k][c]) : 0.0f) << k;
+    }
   std::vector<std::uint32_t> live;
   for (const std::array<int, 3>& t : s.triangles)
     if (t[0] >= 0) live.insert(live.end(), t.begin(), t.end());
