@@ -27,7 +27,8 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, Tr
   freed_.clear();
   const Topology& m = sim.topo_;
   for (bool first = true; !pending_.empty(); first = false) {
-    scan(sim, restores, stamps, first);
+    if (!first) retest(sim, restores, stamps);
+    scan(restores, m, stamps);
     const std::size_t done = freed_.size();
     freed_.resize(done + wave_.size());
     sim.par_.run(int(wave_.size()), kWaveGrain, [&](int b, int e) {
@@ -53,9 +54,14 @@ void RestoreWaves::touched(std::vector<int>& out) const {
   }
 }
 
+RestoreWaves::Answer RestoreWaves::test(const FastSimulator& sim, int edge, const TriangleStamps& stamps) {
+  const Topology& m = sim.topo_;
+  return any_touched(m.records[m.E[edge].record], stamps) ? kNever : sim.can_restore(edge) ? kRestorable : kNotNow;
+}
+
 // Every candidate's answer on the state after the splits, in parallel. The stamps are the
 // splits' only: a restore's stamps matter to candidates that share its vertices, which wait for
-// a later wave and test again there.
+// a later wave and are tested again there.
 void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
   const int nr = int(restores.size());
@@ -63,16 +69,24 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
   sim.par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
-      const int edge = restores[k];
-      const SplitRecord& r = m.records[m.E[edge].record];
-      const Answer answer = any_touched(r, stamps) ? kNever : sim.can_restore(edge) ? kRestorable : kNotNow;
-      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, answer};
+      const SplitRecord& r = m.records[m.E[restores[k]].record];
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, test(sim, restores[k], stamps)};
     }
   });
 }
 
-void RestoreWaves::scan(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps, bool first) {
+void RestoreWaves::retest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
+  sim.par_.run(int(pending_.size()), kRestoreTestGrain, [&](int b, int e) {
+    for (int q = b; q < e; ++q) {
+      if (q + kNear < e) prefetch(&m.records[m.E[restores[pending_[q + kNear]]].record]);
+      const int k = pending_[q];
+      candidates_[k].answer = test(sim, restores[k], stamps);
+    }
+  });
+}
+
+void RestoreWaves::scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps) {
   next_.clear(), wave_.clear(), claimed_.clear();
   for (std::size_t q = 0; q < pending_.size(); ++q) {
     if (q + kFar < pending_.size())
@@ -81,10 +95,7 @@ void RestoreWaves::scan(FastSimulator& sim, const std::vector<int>& restores, Tr
     const int k = pending_[q], e = restores[k];
     const std::array<int, 5>& verts = candidates_[k].verts;
     const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
-    if (!waits) {
-      if (first && candidates_[k].answer != kRestorable) continue;
-      if (!first && (any_touched(m.records[m.E[e].record], stamps) || !sim.can_restore(e))) continue;
-    }
+    if (!waits && candidates_[k].answer != kRestorable) continue;
     for (int v : verts)
       if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed_.push_back(v);
     if (waits) {

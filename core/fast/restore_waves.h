@@ -6,8 +6,10 @@
 // the next wave (and claims its vertices, so that later candidates at them wait too); the others
 // are decided on the current state and the accepted ones, vertex-disjoint, apply in parallel.
 // Every vertex sees its restores in event order, and the freed ids reach the free lists in event
-// order after the waves: the serial result, bit for bit. The first wave's answers are pre-tested
-// in parallel, so its serial scan reads only a compact array and the claims.
+// order after the waves: the serial result, bit for bit. Each wave's answers are tested in
+// parallel before its scan, so the serial scan reads only a compact array and the claims: a
+// scan changes no state and marks only the triangles of the candidates it accepts, whose corners
+// it claims, so a candidate that does not wait gets the answer the scan would have computed.
 #pragma once
 
 #include <array>
@@ -37,15 +39,20 @@ class RestoreWaves {
   std::uint64_t large_waves() const { return large_waves_; }
 
  private:
-  /// A candidate's answer on the state after the pass's splits.
+  /// A candidate's answer on the current state: never (in this pass) once an accepted event of
+  /// the pass changed a triangle of its record, else whether it can restore now.
   enum Answer : std::uint8_t { kNever, kNotNow, kRestorable };
   struct Candidate {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
-    Answer answer;
+    Answer answer;             ///< as of the start of the candidate's current wave
   };
+  static Answer test(const FastSimulator& sim, int edge, const TriangleStamps& stamps);
+  /// Every candidate's vertices and first answer, on the state after the pass's splits.
   void pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
+  /// The answers of the candidates pending for a later wave, on the state after the last wave.
+  void retest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
   /// One wave's serial scan of pending_: fills wave_ and next_, claims and stamps.
-  void scan(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps, bool first);
+  void scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps);
 
   Array<int> claim_;  ///< per vertex slot: 1 + the candidate claiming it in a wave (0 between waves)
   // Per pass, kept so that a pass allocates (and faults in) no memory.
