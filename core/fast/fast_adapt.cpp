@@ -7,7 +7,6 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
-#include <utility>
 
 #if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
 #include <immintrin.h>
@@ -16,6 +15,7 @@
 #include "fast/event_prefetch.h"
 #include "fast/fast_sim.h"
 #include "fast/pass_timer.h"
+#include "fast/radix.h"
 #include "fast/serial_events.h"
 #include "model/random.h"
 
@@ -31,7 +31,6 @@ static_assert(kTestBlock % Parallel::kLanes == 0);
 constexpr int kRenewGrain = 512;  ///< a normal per vertex: far less than an event
 
 constexpr int kSkip = 64;  ///< decisions tested at once: one line
-constexpr int kIdDigit = 11;  ///< bits an event-id radix pass sorts: its 2,048 counts stay in L1
 
 /// Whether the kSkip bytes at p are all 0.
 inline bool all_zero(const std::uint8_t* p) {
@@ -64,19 +63,18 @@ void for_each_nonzero(const std::uint8_t* bytes, int begin, int end, F&& f) {
 }
 
 /// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
-/// digit radix passes of at most kIdDigit bits between keys and spare: a few streaming passes
-/// where a comparison sort of the step's thousands of keys costs a dozen compares a key.
-void sort_by_id(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& spare, std::vector<int>& count, int id_bits) {
-  const int passes = std::max(1, (id_bits + kIdDigit - 1) / kIdDigit);
-  const int digit_bits = (id_bits + passes - 1) / passes;
-  const std::uint64_t mask = (std::uint64_t(1) << digit_bits) - 1;
+/// digit radix passes (radix.h) between keys and spare: a few streaming passes where a
+/// comparison sort of the step's thousands of keys costs a dozen compares a key.
+void sort_by_id(const Parallel& par, std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& spare,
+                std::vector<int>& count, int id_bits) {
+  const RadixDigits d = radix_digits(id_bits);
+  const std::uint64_t mask = (std::uint64_t(1) << d.bits) - 1;
   spare.resize(keys.size());
-  for (int shift = 32; shift < 32 + passes * digit_bits; shift += digit_bits) {
-    count.assign(std::size_t(1) << digit_bits, 0);
-    for (std::uint64_t k : keys) ++count[(k >> shift) & mask];
-    int sum = 0;
-    for (int& c : count) sum += std::exchange(c, sum);
-    for (std::uint64_t k : keys) spare[std::size_t(count[(k >> shift) & mask]++)] = k;
+  for (int shift = 32; shift < 32 + d.passes * d.bits; shift += d.bits) {
+    const std::uint64_t* from = keys.data();
+    std::uint64_t* to = spare.data();
+    stable_pass(par, count, int(keys.size()), 1 << d.bits, [&](int k) { return int((from[k] >> shift) & mask); },
+                [&](int k, int at) { to[at] = from[k]; });
     keys.swap(spare);
   }
 }
@@ -156,7 +154,7 @@ void FastSimulator::collect_events() {
     s.keys.clear();
     for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2)
       s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
-    sort_by_id(s.keys, s.spare, s.count, id_bits);
+    sort_by_id(par_, s.keys, s.spare, s.count, id_bits);
     std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
     slots.resize(s.keys.size());
     for (std::size_t k = 0; k < s.keys.size(); ++k) slots[k] = int(std::uint32_t(s.keys[k]));

@@ -7,11 +7,13 @@
 #include <type_traits>
 #include <utility>
 
+#include "fast/radix.h"
+
 namespace crumple::fast {
 
 namespace {
 
-/// Minimum items per parallel chunk (and per sort block) of relayout's loops: an item is a load
+/// Minimum items per parallel chunk of relayout's loops: an item is a load
 /// or two and a store, so chunks must be large to repay their scheduling.
 constexpr int kGrain = 4096;
 /// How far ahead a permutation or repack prefetches its scattered sources: its body is a few
@@ -29,35 +31,6 @@ std::uint64_t spread3(std::uint64_t v) {
   return v;
 }
 
-/// One stable counting pass over the items 0..n-1 with keys in [0, buckets): place(k, to) is
-/// told each item's rank among the items of smaller key, then of equal key and smaller index.
-/// The items are cut into one block per thread, each counted into its own histogram, the
-/// histograms summed in bucket-major order (serial, buckets x blocks), then each block places
-/// its items in index order: the ranks do not depend on the number of blocks, so the result is
-/// the serial pass's on any thread count.
-template <class Key, class Place>
-void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
-  // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
-  const int wanted = std::clamp(n / kGrain, 1, std::min(par.threads(), 8));
-  const int per = std::max(1, (n + wanted - 1) / wanted);  // >= 1: no block of zero items
-  const int blocks = Parallel::blocks_of(n, per);          // the blocks run_blocks runs
-  hist.assign(std::size_t(blocks) * buckets, 0);
-  par.run_blocks(n, per, [&](int b, int begin, int end) {
-    int* h = &hist[std::size_t(b) * buckets];
-    for (int k = begin; k < end; ++k) ++h[key(k)];
-  });
-  int sum = 0;
-  for (int c = 0; c < buckets; ++c)
-    for (int b = 0; b < blocks; ++b) sum += std::exchange(hist[std::size_t(b) * buckets + c], sum);
-  par.run_blocks(n, per, [&](int b, int begin, int end) {
-    int* h = &hist[std::size_t(b) * buckets];
-    for (int k = begin; k < end; ++k) place(k, h[key(k)]++);
-  });
-}
-
-/// Most bits a radix pass sorts: its histograms (4096 counts a block) stay in L1.
-constexpr int kMaxDigit = 12;
-
 /// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits) into `order`, in as
 /// few passes of at most kMaxDigit bits as cover them (stable: the order is the same whatever
 /// the digits).
@@ -67,8 +40,8 @@ void radix_order(const Parallel& par, LayoutScratch& s, int bits, std::vector<in
   s.idx.resize(n);
   s.code2.resize(n);
   for (int k = 0; k < n; ++k) order[k] = k;
-  const int passes = (bits + kMaxDigit - 1) / kMaxDigit;
-  const int digit_bits = (bits + passes - 1) / passes;
+  const RadixDigits d = radix_digits(bits);
+  const int digit_bits = d.bits;
   const std::uint64_t mask = (std::uint64_t(1) << digit_bits) - 1;
   for (int shift = 0; shift < bits; shift += digit_bits) {
     const std::uint64_t* code = s.code.data();

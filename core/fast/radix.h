@@ -1,0 +1,56 @@
+// Stable counting passes for the fast backend's least-significant-digit radix sorts (the
+// relayout's Morton order, the step's event order): the same ranks on any thread count.
+#pragma once
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+#include "fast/parallel.h"
+
+namespace crumple::fast {
+
+/// Most bits a radix pass sorts: its histograms (4096 counts a block) stay in L1.
+constexpr int kMaxDigit = 12;
+/// Fewest items a counting pass gives a block of its own: counting an item is a load and an
+/// increment, so smaller blocks do not repay their histograms.
+constexpr int kRadixBlock = 4096;
+
+/// How an LSD radix sort covers `bits` key bits: as few passes of at most kMaxDigit bits as
+/// cover them, each of `bits` digit bits (the last may reach past the key's top bit).
+struct RadixDigits {
+  int passes = 1;
+  int bits = 0;
+};
+inline RadixDigits radix_digits(int bits) {
+  const int passes = std::max(1, (bits + kMaxDigit - 1) / kMaxDigit);
+  return {passes, (bits + passes - 1) / passes};
+}
+
+/// One stable counting pass over the items 0..n-1 with keys in [0, buckets): place(k, to) is
+/// told each item's rank among the items of smaller key, then of equal key and smaller index.
+/// The items are cut into one block per thread, each counted into its own histogram, the
+/// histograms summed in bucket-major order (serial, buckets x blocks), then each block places
+/// its items in index order: the ranks do not depend on the number of blocks, so the result is
+/// the serial pass's on any thread count.
+template <class Key, class Place>
+void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
+  // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
+  const int wanted = std::clamp(n / kRadixBlock, 1, std::min(par.threads(), 8));
+  const int per = std::max(1, (n + wanted - 1) / wanted);  // >= 1: no block of zero items
+  const int blocks = Parallel::blocks_of(n, per);          // the blocks run_blocks runs
+  hist.assign(std::size_t(blocks) * buckets, 0);
+  par.run_blocks(n, per, [&](int b, int begin, int end) {
+    int* h = &hist[std::size_t(b) * buckets];
+    for (int k = begin; k < end; ++k) ++h[key(k)];
+  });
+  int sum = 0;
+  for (int c = 0; c < buckets; ++c)
+    for (int b = 0; b < blocks; ++b) sum += std::exchange(hist[std::size_t(b) * buckets + c], sum);
+  par.run_blocks(n, per, [&](int b, int begin, int end) {
+    int* h = &hist[std::size_t(b) * buckets];
+    for (int k = begin; k < end; ++k) place(k, h[key(k)]++);
+  });
+}
+
+}  // namespace crumple::fast
