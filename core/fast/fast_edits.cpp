@@ -181,6 +181,25 @@ SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
   return p;
 }
 
+SplitPlan FastSimulator::plan_split_at(const SplitCandidate& c, int split, int edge_at, int tri_at) const {
+  const Topology& m = topo_;
+  SplitPlan p;
+  if (c.e < 0) return p;
+  p.e = c.e;
+  p.flat_draw = c.flat_draw;
+  p.ends = c.ends;
+  // plan_split's takes, in its order.
+  p.n = m.peek_vertex(split);
+  p.edges[0] = m.peek_edge(edge_at++);
+  p.edges[1] = m.peek_edge(edge_at++);
+  if (c.ends[2] >= 0) p.edges[2] = m.peek_edge(edge_at++);
+  if (c.ends[3] >= 0) p.edges[3] = m.peek_edge(edge_at);
+  if (c.tris[0] >= 0) p.tris[0] = m.peek_triangle(tri_at++);
+  if (c.tris[1] >= 0) p.tris[1] = m.peek_triangle(tri_at);
+  p.record = m.peek_record(split);
+  return p;
+}
+
 bool FastSimulator::split_edge(int e) {
   const SplitPlan p = plan_split(split_candidate(e));
   if (p.e < 0) return false;

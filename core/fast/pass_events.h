@@ -51,14 +51,18 @@ class TriangleStamps {
   std::uint64_t pass() const { return pass_; }
   /// Triangle t (-1: none) was changed by an accepted event of this pass.
   bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == pass_; }
-  /// Marks triangle t (-1: none) changed by this pass (serial: the pre-passes and scans).
+  /// Marks triangle t (-1: none) changed by this pass. Serial, but for triangles below cover()'s
+  /// count, which distinct events may mark in parallel (one stamp each, no growth).
   void mark(int t) {
     if (t < 0) return;
-    // A split marks the slots it took at the end of the arrays, one or two at a time: growing
-    // by an eighth at once keeps the growth's fill off the per-split path (a stamp of 0 is an
-    // untouched triangle, so slots past the mesh's are harmless).
-    if (t >= int(stamp_.size())) stamp_.resize(std::max(std::size_t(t) + 1, stamp_.size() + stamp_.size() / 8), 0);
+    if (t >= int(stamp_.size())) cover(std::size_t(t) + 1);
     stamp_[t] = pass_;
+  }
+  /// Room for the stamps of the first `triangles` slots. Growing by an eighth at least keeps the
+  /// growth's fill off the per-event path (a stamp of 0 is an untouched triangle, so slots past
+  /// the mesh's are harmless).
+  void cover(std::size_t triangles) {
+    if (triangles > stamp_.size()) stamp_.resize(std::max(triangles, stamp_.size() + stamp_.size() / 8), 0);
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
   const std::uint64_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }

@@ -10,24 +10,27 @@ namespace crumple::fast {
 namespace {
 constexpr int kRoundGrain = 64;       ///< smaller rounds run inline: too few splits to repay a parallel loop's start
 constexpr int kCandidateGrain = 256;  ///< a candidate read misses several lines: smaller chunks repay
+constexpr int kTakeGrain = 512;       ///< a plan's takes miss a line or two (the free ids' slots)
 }  // namespace
 
 void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices); }
 
 int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const int rounds = plan(sim, splits, stamps);
-  sim.topo_.fit();  // the slots plan_split took
+  sim.topo_.fit();  // the slots the plans took
   make_room(sim);
   return run_rounds(sim, rounds);
 }
 
-// The serial pre-pass: acceptance, new ids and rounds, in event order. What it needs of each
-// candidate is read in parallel first into a compact array, so that the serial loop touches only
-// that array, the stamps and the rounds. Returns the number of rounds.
+// The pre-pass: acceptance and rounds serially in event order, then the new ids. What the serial
+// loop needs of each candidate is read in parallel first into a compact array, so that it
+// touches only that array, the stamps and the rounds; it counts the ids each accepted split
+// takes, so that the plans can look theirs up in parallel and take them all at once after.
+// Returns the number of rounds.
 int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
   tally_.resize(std::size_t(m.V.size()), Tally{});
-  plans_.clear(), round_of_.clear(), involved_.clear();
+  accepted_.clear(), round_of_.clear(), involved_.clear();
   candidates_.resize(splits.size());
   sim.par_.run(int(splits.size()), kCandidateGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
@@ -35,7 +38,14 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
       candidates_[k] = sim.split_candidate(splits[k]);
     }
   });
-  int rounds = 0;
+  const int rounds = accept(stamps);
+  take_ids(sim, stamps);
+  return rounds;
+}
+
+// Acceptance (D13) and rounds, serially in event order.
+int SplitRounds::accept(TriangleStamps& stamps) {
+  int rounds = 0, edges = 0, tris = 0;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     if (k + kNear < candidates_.size()) {
       const SplitCandidate& f = candidates_[k + kNear];
@@ -45,9 +55,7 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
         if (v >= 0) prefetch(&tally_[v]);
     }
     const SplitCandidate& c = candidates_[k];
-    if (stamps.touched(c.tris[0]) || stamps.touched(c.tris[1])) continue;
-    const SplitPlan p = sim.plan_split(c);
-    if (p.e < 0) continue;
+    if (c.e < 0 || stamps.touched(c.tris[0]) || stamps.touched(c.tris[1])) continue;
     int round = 0;
     for (int v : c.ends)
       if (v >= 0) round = std::max(round, tally_[v].round_last);
@@ -65,11 +73,33 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
       t.tri_adds += q >= 2;
     }
     rounds = std::max(rounds, round);
-    for (int t : {c.tris[0], c.tris[1], p.tris[0], p.tris[1]}) stamps.mark(t);
-    plans_.push_back(p);
+    for (int t : c.tris) stamps.mark(t);
+    accepted_.push_back(Accepted{int(k), edges, tris});
+    edges += 2 + (c.ends[2] >= 0) + (c.ends[3] >= 0);  // plan_split's takes
+    tris += (c.tris[0] >= 0) + (c.tris[1] >= 0);
     round_of_.push_back(round);
   }
+  edges_taken_ = edges, tris_taken_ = tris;
   return rounds;
+}
+
+// The accepted splits' plans, in parallel: each looks its new ids up at its place in the pass's
+// takes, and marks its new triangles (slots no candidate of the pass had, so the acceptance did
+// not read their stamps); then every id is taken at once.
+void SplitRounds::take_ids(FastSimulator& sim, TriangleStamps& stamps) {
+  Topology& m = sim.topo_;
+  const int n = int(accepted_.size());
+  plans_.resize(accepted_.size());
+  const int fresh_tris = std::max(0, tris_taken_ - int(m.T.free_ids.size()));  // takes past the free list
+  stamps.cover(m.T.lid.size() + std::size_t(fresh_tris));
+  sim.par_.run(n, kTakeGrain, [&](int b, int e) {
+    for (int j = b; j < e; ++j) {
+      const Accepted& a = accepted_[j];
+      plans_[j] = sim.plan_split_at(candidates_[a.candidate], j, a.edge_at, a.tri_at);
+      for (int t : plans_[j].tris) stamps.mark(t);
+    }
+  });
+  m.take_batch(n, edges_taken_, tris_taken_, n);
 }
 
 // Room in the adjacency lists for every append the plan counted, so that no block moves while

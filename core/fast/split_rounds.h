@@ -32,6 +32,8 @@ class SplitRounds {
 
  private:
   int plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
+  int accept(TriangleStamps& stamps);
+  void take_ids(FastSimulator& sim, TriangleStamps& stamps);
   void make_room(FastSimulator& sim);
   int run_rounds(FastSimulator& sim, int rounds);
 
@@ -48,6 +50,13 @@ class SplitRounds {
   Array<Tally> tally_;
   // Per pass, kept so that a pass allocates (and faults in) no memory.
   std::vector<SplitCandidate> candidates_;   ///< per split event
+  /// An accepted split: its candidate, and where its new edges and triangles fall among the
+  /// pass's takes of each kind (its vertex and record are its own index among the accepted).
+  struct Accepted {
+    int candidate, edge_at, tri_at;
+  };
+  std::vector<Accepted> accepted_;           ///< in event order
+  int edges_taken_ = 0, tris_taken_ = 0;     ///< by all of accepted_
   std::vector<SplitPlan> plans_;             ///< accepted splits, in event order
   std::vector<int> round_of_;                ///< per plan
   std::vector<int> involved_;                ///< vertices of accepted splits (i, j, l, r), once each

@@ -84,6 +84,44 @@ int take_slot(Kind& k) {
   return int(size);
 }
 
+// take_slot's batch form (Topology::peek_X, take_batch): the q-th take pops the q-th newest free
+// id, and the takes past the free list make new ids and slots in order.
+template <class Kind>
+int peek_slot(const Kind& k, int q) {
+  const int free = int(k.free_ids.size());
+  return q < free ? k.phys[std::size_t(k.free_ids[std::size_t(free - 1 - q)])] : int(k.lid.size()) + (q - free);
+}
+
+template <class Kind>
+void take_slots(Kind& k, int count) {
+  const int pops = std::min(count, int(k.free_ids.size()));
+  k.free_ids.resize(k.free_ids.size() - std::size_t(pops));
+  for (int q = pops; q < count; ++q) {
+    const auto size = std::int32_t(k.lid.size());
+    k.lid.push_back(size);
+    k.phys.push_back(size);
+  }
+}
+
+int Topology::peek_vertex(int q) const { return peek_slot(V, q); }
+int Topology::peek_edge(int q) const { return peek_slot(E, q); }
+int Topology::peek_triangle(int q) const { return peek_slot(T, q); }
+int Topology::peek_record(int q) const {
+  const int free = int(free_records.size());
+  return q < free ? free_records[std::size_t(free - 1 - q)] : int(records.size()) + (q - free);
+}
+
+void Topology::take_batch(int vertices, int edges, int triangles, int records_taken) {
+  V.created += vertices;
+  take_slots(V, vertices);
+  take_slots(E, edges);
+  take_slots(T, triangles);
+  const int pops = std::min(records_taken, int(free_records.size()));
+  free_records.resize(free_records.size() - std::size_t(pops));
+  records.resize(records.size() + std::size_t(records_taken - pops));
+  records.keep_warm();
+}
+
 int Topology::new_vertex() {
   const int v = take_vertex();
   fit();

@@ -194,6 +194,15 @@ class Topology {
   int take_edge();
   int take_triangle();
   int take_record();  ///< a split record id (LIFO free list, else a new one)
+  // A batch of takes decided in advance (the split plan, split_rounds.h): peek_X(q) is the slot
+  // that the q-th take_X from now would return (q = 0: the next one), without taking it, so the
+  // batch's slots can be looked up in parallel; take_batch then takes that many of each kind,
+  // as that many take_X calls would.
+  int peek_vertex(int q) const;
+  int peek_edge(int q) const;
+  int peek_triangle(int q) const;
+  int peek_record(int q) const;
+  void take_batch(int vertices, int edges, int triangles, int records);
   void fit();         ///< grows every array to the slots taken (new slots value-initialized)
   void init_vertex(int v);
   void init_edge(int e, int a, int b, float l0);
