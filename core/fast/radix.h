@@ -13,8 +13,10 @@ namespace crumple::fast {
 /// Most bits a radix pass sorts: its histograms (4096 counts a block) stay in L1.
 constexpr int kMaxDigit = 12;
 /// Fewest items a counting pass gives a block of its own: counting an item is a load and an
-/// increment, so smaller blocks do not repay their histograms.
-constexpr int kRadixBlock = 4096;
+/// increment, and every block adds a histogram of up to 4096 counts to the serial sum and a
+/// parallel loop's start to each pass, so smaller blocks do not repay them (a step's event keys,
+/// some thousands, sort faster in one block).
+constexpr int kRadixBlock = 16384;
 
 /// How an LSD radix sort covers `bits` key bits: as few passes of at most kMaxDigit bits as
 /// cover them, each of `bits` digit bits (the last may reach past the key's top bit).

@@ -14,6 +14,7 @@
 #include "fast/fast_sim.h"
 #include "fast/layout.h"
 #include "fast/parallel.h"
+#include "fast/radix.h"
 #include "fast/wide.h"
 #include "support/fixtures.h"
 
@@ -384,7 +385,7 @@ TEST(FastRender, BuffersAreTheSnapshotInIdOrder) {
 }
 
 // The relayout's sorts run as per-thread blocks on two threads (layout.cpp's stable_pass): the
-// slot order they give must be the one thread's, element for element. 96 x 96, so that every
+// slot order they give must be the one thread's, element for element. 192 x 192, so that every
 // sort has over two blocks' worth of items.
 TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
   Params p;
@@ -392,13 +393,13 @@ TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
     std::vector<std::int32_t> v, e, t;
   };
   auto relaid = [&](int threads) {  // one simulator alive at a time (see RelayoutEveryStep...)
-    fast::FastSimulator sim(make_grid(96), p, threads);
+    fast::FastSimulator sim(make_grid(192), p, threads);
     sim.set_layout_fraction(-1);
     for (int f = 0; f < 40; ++f) sim.step();
     sim.run_pass(fast::Pass::Layout);
     EXPECT_EQ(sim.check_topology(), "");
     const fast::Topology& m = sim.topology();
-    EXPECT_GT(m.V.size(), 2 * 4096);  // two blocks of the vertex sort (kGrain in layout.cpp)
+    EXPECT_GT(m.V.size(), 2 * fast::kRadixBlock);  // two blocks of the vertex sort
     return Order{{m.V.lid.begin(), m.V.lid.end()}, {m.E.lid.begin(), m.E.lid.end()}, {m.T.lid.begin(), m.T.lid.end()}};
   };
   const Order one = relaid(1), two = relaid(2);
