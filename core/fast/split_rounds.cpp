@@ -1,6 +1,7 @@
 #include "fast/split_rounds.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "fast/event_prefetch.h"
 #include "fast/fast_sim.h"
@@ -19,7 +20,14 @@ int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, Trian
   const int rounds = plan(sim, splits, stamps);
   sim.topo_.fit();  // the slots the plans took
   make_room(sim);
-  return run_rounds(sim, rounds);
+  // A list that outgrew its block during the rounds would have moved it to its pool's end from
+  // two threads at once (list_spring's serial fallback): make_room must have given every list
+  // its room. Two size tests a pass make that a loud failure rather than a rare race.
+  const std::size_t springs = sim.topo_.V.springs.size(), tris = sim.topo_.V.tris.size();
+  const int applied = run_rounds(sim, rounds);
+  if (sim.topo_.V.springs.size() != springs || sim.topo_.V.tris.size() != tris)
+    throw std::logic_error("split rounds: an adjacency list moved its block while rounds ran");
+  return applied;
 }
 
 // The pre-pass: acceptance and rounds serially in event order, then the new ids. What the serial
