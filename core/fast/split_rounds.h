@@ -1,8 +1,9 @@
 // The splits of one topology pass, in parallel rounds with the serial result (docs/DECISIONS.md
-// D13). Acceptance and new ids are decided first, serially in event order: a split is skipped
-// when an earlier accepted split of the pass changed one of its edge's two triangles, and those
-// are still the triangles it had at the start of the pass (a split changes only its own two, and
-// any later split sharing one is skipped). Accepted splits then apply in rounds: a split's round
+// D13). Acceptance is decided first, serially in event order: a split is skipped when an
+// earlier accepted split of the pass changed one of its edge's two triangles, and those are
+// still the triangles it had at the start of the pass (a split changes only its own two, and any
+// later split sharing one is skipped). Counting what each accepted split takes then gives each
+// its new ids, looked up in parallel. Accepted splits then apply in rounds: a split's round
 // is one more than the last round of an earlier split sharing one of its vertices, so the
 // splits of a round have disjoint vertex sets (hence disjoint edges, triangles and adjacency
 // lists) and run in parallel, while every vertex still receives its edits in event order.
