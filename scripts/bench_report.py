@@ -540,8 +540,8 @@ def report(json_path, run, context, benches, out_dir, charts):
                  f"{run.get('seconds', '?')} s in all. Medians and CV (sample standard deviation / mean) are over the repetitions.")
     prep = context.get("crumple_prep_fraction_of_sphere_time")
     prep_txt = f"{float(prep):g} x sphere_time" if prep else "the prepared point"
-    lines.append(f"- `BM_Frame/<backend>/<threads>/<N>`: one 1/60 s frame of the default sphere crumple "
-                 f"(`crumple::Params` defaults) on an N x N grid as an engine's frame loop runs it: one `Sheet::step` "
+    lines.append(f"- `BM_Frame/<backend>/<threads>/<N>`: one 1/60 s frame of the paper's sphere crumple "
+                 f"(`crumple::Params` defaults, `paper_params()`; the command's default configuration is `BM_Default`'s) on an N x N grid as an engine's frame loop runs it: one `Sheet::step` "
                  "call of the embedding API, i.e. the frame's steps plus packing the render buffers and the totals "
                  "pass of the instability check (docs/PERFORMANCE.md gives their share); timed from a state prepared by simulating to "
                  f"{prep_txt}, where edges split and restore every frame. Each iteration clones the prepared state "
