@@ -188,7 +188,8 @@ SplitPlan FastSimulator::plan_split_at(const SplitCandidate& c, int split, int e
   p.e = c.e;
   p.flat_draw = c.flat_draw;
   p.ends = c.ends;
-  // plan_split's takes, in its order.
+  // plan_split's takes, in its order. Written out again rather than shared, so that the serial
+  // oracle (split_edge -> plan_split -> take_X) stays an independent check of these positions.
   p.n = m.peek_vertex(split);
   p.edges[0] = m.peek_edge(edge_at++);
   p.edges[1] = m.peek_edge(edge_at++);
