@@ -111,6 +111,8 @@ class FastSimulator final : public Simulator {
   std::uint64_t large_rounds() const { return rounds_.large_rounds(); }
   /// Restore waves so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_waves() const { return waves_.large_waves(); }
+  /// The restores the last step's topology pass applied in waves, for tests of the waves.
+  std::vector<RestoreWaves::Applied> restore_waves_applied() const { return waves_.applied(); }
 
  private:
   StepConstants step_constants() const;

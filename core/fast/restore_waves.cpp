@@ -23,12 +23,11 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, Tr
   claim_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between waves
   pending_.clear();
   for (int k = 0; k < int(candidates_.size()); ++k)
-    if (candidates_[k].answer != kNever) pending_.push_back(k);
+    if (candidates_[k].restorable) pending_.push_back(k);
   freed_.clear();
   const Topology& m = sim.topo_;
-  for (bool first = true; !pending_.empty(); first = false) {
-    if (!first) retest(sim, restores, stamps);
-    scan(restores, m, stamps);
+  for (int wave = 0; !pending_.empty(); ++wave) {
+    scan(restores, m, stamps, wave);
     const std::size_t done = freed_.size();
     freed_.resize(done + wave_.size());
     sim.par_.run(int(wave_.size()), kWaveGrain, [&](int b, int e) {
@@ -54,14 +53,15 @@ void RestoreWaves::touched(std::vector<int>& out) const {
   }
 }
 
-RestoreWaves::Answer RestoreWaves::test(const FastSimulator& sim, int edge, const TriangleStamps& stamps) {
-  const Topology& m = sim.topo_;
-  return any_touched(m.records[m.E[edge].record], stamps) ? kNever : sim.can_restore(edge) ? kRestorable : kNotNow;
+std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {
+  std::vector<Applied> out;
+  for (const auto& f : freed_) out.push_back({f.first, candidates_[std::size_t(f.first)].wave, candidates_[std::size_t(f.first)].verts});
+  return out;
 }
 
-// Every candidate's answer on the state after the splits, in parallel. The stamps are the
-// splits' only: a restore's stamps matter to candidates that share its vertices, which wait for
-// a later wave and are tested again there.
+// Every candidate's answer on the state after the splits, in parallel: restorable unless an
+// accepted split of the pass changed a triangle of its record (the splits' stamps) or
+// can_restore says no. No restore of the pass changes it (the class comment).
 void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
   const int nr = int(restores.size());
@@ -70,32 +70,20 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
       const SplitRecord& r = m.records[m.E[restores[k]].record];
-      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, test(sim, restores[k], stamps)};
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !any_touched(r, stamps) && sim.can_restore(restores[k]), -1};
     }
   });
 }
 
-void RestoreWaves::retest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
-  const Topology& m = sim.topo_;
-  sim.par_.run(int(pending_.size()), kRestoreTestGrain, [&](int b, int e) {
-    for (int q = b; q < e; ++q) {
-      if (q + kNear < e) prefetch(&m.records[m.E[restores[pending_[q + kNear]]].record]);
-      const int k = pending_[q];
-      candidates_[k].answer = test(sim, restores[k], stamps);
-    }
-  });
-}
-
-void RestoreWaves::scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps) {
+void RestoreWaves::scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps, int wave) {
   next_.clear(), wave_.clear(), claimed_.clear();
   for (std::size_t q = 0; q < pending_.size(); ++q) {
     if (q + kFar < pending_.size())
       for (int v : candidates_[pending_[q + kFar]].verts)
         if (v >= 0) prefetch(&claim_[v]);
-    const int k = pending_[q], e = restores[k];
+    const int k = pending_[q];
     const std::array<int, 5>& verts = candidates_[k].verts;
     const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
-    if (!waits && candidates_[k].answer != kRestorable) continue;
     for (int v : verts)
       if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed_.push_back(v);
     if (waits) {
@@ -103,7 +91,8 @@ void RestoreWaves::scan(const std::vector<int>& restores, const Topology& m, Tri
       continue;
     }
     wave_.push_back(k);
-    for (int t : m.records[m.E[e].record].t) stamps.mark(t);
+    candidates_[k].wave = wave;
+    for (int t : m.records[m.E[restores[k]].record].t) stamps.mark(t);
   }
 }
 

@@ -1,15 +1,15 @@
 // The restores of one topology pass, in parallel waves with the serial result
 // (docs/DECISIONS.md D14). A restore reads and writes only its own vertices {n, i, j, l, r} with
-// their lists, edges and triangles, so a candidate's answer can change only through an earlier
-// candidate sharing one of its vertices. A wave scans the pending candidates in event order: one
-// sharing a vertex with an earlier candidate of the scan that is accepted or waiting waits for
-// the next wave (and claims its vertices, so that later candidates at them wait too); the others
-// are decided on the current state and the accepted ones, vertex-disjoint, apply in parallel.
-// Every vertex sees its restores in event order, and the freed ids reach the free lists in event
-// order after the waves: the serial result, bit for bit. Each wave's answers are tested in
-// parallel before its scan, so the serial scan reads only a compact array and the claims: a
-// scan changes no state and marks only the triangles of the candidates it accepts, whose corners
-// it claims, so a candidate that does not wait gets the answer the scan would have computed.
+// their lists, edges and triangles. Each candidate is tested once, in parallel, on the state
+// after the pass's splits, and that answer holds through the pass: no restore of the pass makes
+// a restorable candidate unrestorable or the other way round (D14 proves it; the serial
+// oracle, which tests each candidate at its turn, checks it in the tests). So exactly the
+// restorable candidates are applied, and the waves only keep their event order where they share
+// a vertex: a wave scans the pending restorable candidates in event order; one sharing a vertex
+// with an earlier one of the scan waits for the next wave (and claims its vertices, so that
+// later ones at them wait too); the others, vertex-disjoint, apply in parallel. Every vertex
+// sees its restores in event order, and the freed ids reach the free lists in event order after
+// the waves: the serial result, bit for bit.
 #pragma once
 
 #include <array>
@@ -37,22 +37,25 @@ class RestoreWaves {
   void touched(std::vector<int>& out) const;
   /// Waves so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_waves() const { return large_waves_; }
+  /// One restore the last apply() applied: its place in the pass's restore events, its wave
+  /// (0 first) and its record's vertices n, i, j, l, r (-1: none), for tests of the waves.
+  struct Applied {
+    int event, wave;
+    std::array<int, 5> verts;
+  };
+  std::vector<Applied> applied() const;
 
  private:
-  /// A candidate's answer on the current state: never (in this pass) once an accepted event of
-  /// the pass changed a triangle of its record, else whether it can restore now.
-  enum Answer : std::uint8_t { kNever, kNotNow, kRestorable };
   struct Candidate {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
-    Answer answer;             ///< as of the start of the candidate's current wave
+    bool restorable;           ///< on the state after the pass's splits, and so through the pass
+    int wave;                  ///< the wave that applied it (set when applied)
   };
-  static Answer test(const FastSimulator& sim, int edge, const TriangleStamps& stamps);
-  /// Every candidate's vertices and first answer, on the state after the pass's splits.
+  /// Every candidate's vertices and answer, on the state after the pass's splits.
   void pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
-  /// The answers of the candidates pending for a later wave, on the state after the last wave.
-  void retest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
-  /// One wave's serial scan of pending_: fills wave_ and next_, claims and stamps.
-  void scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps);
+  /// One wave's serial scan of pending_ (restorable candidates): fills wave_ and next_, claims
+  /// and stamps.
+  void scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps, int wave);
 
   Array<int> claim_;  ///< per vertex slot: 1 + the candidate claiming it in a wave (0 between waves)
   // Per pass, kept so that a pass allocates (and faults in) no memory.

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -482,6 +483,62 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
     EXPECT_GT(large_waves, 0u);
     EXPECT_TRUE(same_snapshot(rounds, serial)) << threads << " threads";
   }
+}
+
+// The waves' own rule, which the comparison above cannot see: restores that share a vertex give
+// the serial result even in one wave whenever the wave runs them in event order, as it does on
+// one thread. No two restores of a wave share a vertex, and the restores at each vertex come in
+// event order across the waves. A scan that lets nothing wait, or a waiting candidate that
+// claims no vertices (a later one at its vertices goes first), fails it.
+TEST(FastTopology, RestoreWavesShareNoVertexAndKeepEventOrder) {
+  fast::FastSimulator sim(make_grid(48), Params{}, 2);
+  long applied = 0, later_waves = 0;
+  for (int f = 0; f < 110; ++f) {
+    sim.step();
+    std::vector<fast::RestoreWaves::Applied> restores = sim.restore_waves_applied();
+    std::sort(restores.begin(), restores.end(),
+              [](const auto& a, const auto& b) { return std::pair(a.wave, a.event) < std::pair(b.wave, b.event); });
+    std::map<int, std::pair<int, int>> last;  // vertex -> wave and event of its latest restore so far
+    for (const auto& r : restores) {
+      for (int v : r.verts) {
+        if (v < 0) continue;
+        if (auto it = last.find(v); it != last.end()) {
+          ASSERT_LT(it->second.first, r.wave) << "two restores of one wave at vertex " << v << ", frame " << f;
+          ASSERT_LT(it->second.second, r.event) << "restores out of event order at vertex " << v << ", frame " << f;
+        }
+        last[v] = {r.wave, r.event};
+      }
+      later_waves += r.wave > 0;
+    }
+    applied += long(restores.size());
+  }
+  EXPECT_GT(applied, 500);
+  EXPECT_GT(later_waves, 20);  // restores did share vertices and wait
+}
+
+// A restore candidate's answer on the state after the pass's splits holds through the pass
+// (DECISIONS.md D14), so the waves test each candidate once; the serial oracle tests each at its
+// turn on the state the earlier restores left. Both agree over seeds and both configurations
+// on one thread, where the waves' parallel loops run in order: a restore that changed another
+// candidate's answer would show here, as does a waiting candidate that claims no vertices.
+TEST(FastTopology, RestoreAnswersHoldThroughThePass) {
+  for (const bool paper : {false, true})
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      Params p = paper ? paper_params() : Params{};
+      p.seed = seed;
+      auto run = [&](bool serial, std::vector<StepEvents>& events) {
+        fast::FastSimulator sim(make_grid(32), p, 1);
+        sim.set_serial_edits(serial);
+        for (int f = 0; f < 90; ++f) events.push_back(sim.step());
+        return sim.snapshot();
+      };
+      std::vector<StepEvents> ea, eb;
+      const Snapshot waves = run(false, ea), serial = run(true, eb);
+      long splits = 0, restores = 0;
+      ASSERT_NO_FATAL_FAILURE(same_events(ea, eb, splits, restores));
+      EXPECT_GT(restores, 30) << "seed " << seed;
+      EXPECT_TRUE(same_snapshot(waves, serial)) << (paper ? "paper" : "default") << ", seed " << seed;
+    }
 }
 
 // A split undone at once gives back the mesh exactly: every vertex's spring and triangle lists
