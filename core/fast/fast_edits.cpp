@@ -289,18 +289,19 @@ bool FastSimulator::can_restore(int e) const {
   if (e < 0 || e >= m.E.size() || m.E[e].flags != kAlive || m.E[e].record < 0) return false;
   const SplitRecord& s = m.records[m.E[e].record];
   const int i = s.k[0], j = s.k[1], l = s.k[2], r = s.k[3], n = s.n;
+  // n still has exactly its own edges. Tested first: most candidates that fail, fail here (a
+  // later split at n, not yet restored), and this needs only n's list head, not the edges.
+  const int expected = int(std::count_if(s.k.begin(), s.k.end(), [](int k) { return k >= 0; }));
+  if (m.V.spring_list[n].count != expected) return false;
   if (!(m.V.mass(n) > 0)) return false;
   const int ends[4][2] = {{i, n}, {n, j}, {l, n}, {n, r}};
-  int expected = 0;
   for (int q = 0; q < 4; ++q) {
     if (s.k[q] < 0) continue;
     const int id = s.e[q];
     if (m.E[id].flags != (kAlive | kMesh | kBreakable)) return false;  // [Eq 10]
     const int a = m.E[id].a, b = m.E[id].b;
     if (!((a == ends[q][0] && b == ends[q][1]) || (a == ends[q][1] && b == ends[q][0]))) return false;
-    ++expected;
   }
-  if (m.V.spring_list[n].count != expected) return false;  // n still has exactly its own edges
   if (l >= 0 && !(is_triangle(m.T, s.t[0], i, n, l) && is_triangle(m.T, s.t[1], n, j, l))) return false;
   if (r >= 0 && !(is_triangle(m.T, s.t[2], j, n, r) && is_triangle(m.T, s.t[3], n, i, r))) return false;
   return true;
