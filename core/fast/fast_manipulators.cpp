@@ -117,21 +117,23 @@ void FastSimulator::render_triangles(std::vector<std::uint32_t>& out) {
   constexpr int kAhead = 16;  ///< ids ahead whose triangle record is prefetched (a random slot)
   const Triangles& T = topo_.T;
   const int n = T.size(), blocks = Parallel::blocks_of(n, kReduceBlock);
-  // Fixed blocks of ids, each block's triangles at its offset: the buffer does not depend on threads.
+  // Fixed blocks of ids, each block's triangles at its offset: the buffer does not depend on
+  // threads. A block's live triangles are its ids less its free ones (the free list holds
+  // exactly the dead triangles' ids, Topology::check), counted from the free list rather than
+  // from every id's slot read at random.
   std::vector<std::size_t>& start = render_scratch_;
   start.assign(std::size_t(blocks) + 1, 0);
-  par_.run_blocks(n, kReduceBlock, [&](int b, int begin, int end) {
-    for (int id = begin; id < end; ++id) start[b + 1] += T.alive[T.phys[id]];
-  });
-  for (int b = 0; b < blocks; ++b) start[b + 1] += start[b];
+  for (int id : T.free_ids) ++start[std::size_t(id / kReduceBlock) + 1];
+  for (int b = 0; b < blocks; ++b)
+    start[b + 1] = start[b] + std::size_t(std::min(n, (b + 1) * kReduceBlock) - b * kReduceBlock) - start[b + 1];
   out.resize(3 * start[blocks]);
   par_.run_blocks(n, kReduceBlock, [&](int b, int begin, int end) {
     std::uint32_t* to = out.data() + 3 * start[b];
     for (int id = begin; id < end; ++id) {
       if (id + kAhead < end) __builtin_prefetch(&T[T.phys[id + kAhead]]);
-      const int t = T.phys[id];
-      if (!T.alive[t]) continue;
-      for (int c : T.corners(t)) *to++ = std::uint32_t(topo_.V.lid[c]);
+      const Face& f = T[T.phys[id]];
+      if (f.e[0] < 0) continue;  // dead: kNoFace, which has no sides (a live face has all three)
+      for (int c : f.v) *to++ = std::uint32_t(topo_.V.lid[c]);
     }
   });
 }

@@ -393,9 +393,19 @@ std::string Topology::check() const {
   if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return fail("vertex logical ids are not a bijection");
   if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return fail("edge logical ids are not a bijection");
   if (!bijective(T.lid, T.phys) || T.lid.size() != T.slots.size()) return fail("triangle logical ids are not a bijection");
-  std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0);
+  std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0), triangle_free(T.size(), 0);
   for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;
   for (int e : E.free_ids) edge_free[E.phys[e]] = 1;
+  // The free triangle ids are exactly the dead slots', each once, and a dead slot is kNoFace
+  // (the render buffers count live triangles from the free list and skip faces without sides).
+  for (int id : T.free_ids) {
+    if (id < 0 || id >= T.size() || triangle_free[T.phys[id]]) return fail("triangle free list holds bad id ", id);
+    triangle_free[T.phys[id]] = 1;
+  }
+  for (int t = 0; t < T.size(); ++t) {
+    if (bool(triangle_free[t]) == bool(T.alive[t])) return fail("triangle ", t, " is ", T.alive[t] ? "live on" : "dead off", " the free list");
+    if (!T.alive[t] && T[t].e != kNoFace.e) return fail("dead triangle ", t, " is not kNoFace");
+  }
   for (int t = 0; t < T.size(); ++t) {
     if (!T.alive[t]) continue;
     const auto v = T.corners(t);
