@@ -113,6 +113,8 @@ class FastSimulator final : public Simulator {
   std::uint64_t large_waves() const { return waves_.large_waves(); }
   /// The restores the last step's topology pass applied in waves, for tests of the waves.
   std::vector<RestoreWaves::Applied> restore_waves_applied() const { return waves_.applied(); }
+  /// The splits the last step's topology pass applied in rounds, for tests of the rounds.
+  std::vector<SplitRounds::Applied> split_rounds_applied() const { return rounds_.applied(); }
 
  private:
   StepConstants step_constants() const;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <iterator>
 #include <vector>
 
 #include "fast/aligned.h"
@@ -51,6 +52,11 @@ class TriangleStamps {
   std::uint64_t pass() const { return pass_; }
   /// Triangle t (-1: none) was changed by an accepted event of this pass.
   bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == pass_; }
+  /// Some triangle of `tris` (a split record's slots, say) was changed by this pass.
+  template <class Range>
+  bool any_touched(const Range& tris) const {
+    return std::any_of(std::begin(tris), std::end(tris), [this](int t) { return touched(t); });
+  }
   /// Marks triangle t (-1: none) changed by this pass. Serial, but for triangles below cover()'s
   /// count, which distinct events may mark in parallel (one stamp each, no growth).
   void mark(int t) {

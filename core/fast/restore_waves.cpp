@@ -10,10 +10,6 @@ namespace crumple::fast {
 namespace {
 constexpr int kWaveGrain = 32;          ///< waves are smaller than rounds, and a restore costs about what a split does
 constexpr int kRestoreTestGrain = 128;  ///< a restore test reads a record and its triangles: more per item
-
-bool any_touched(const SplitRecord& r, const TriangleStamps& stamps) {
-  return std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); });
-}
 }  // namespace
 
 void RestoreWaves::reserve(std::size_t vertices) { claim_.reserve_warm(vertices); }
@@ -70,7 +66,7 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
       const SplitRecord& r = m.records[m.E[restores[k]].record];
-      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !any_touched(r, stamps) && sim.can_restore(restores[k]), -1};
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !stamps.any_touched(r.t) && sim.can_restore(restores[k]), -1};
     }
   });
 }

@@ -1,7 +1,5 @@
 #include "fast/serial_events.h"
 
-#include <algorithm>
-
 #include "fast/fast_sim.h"
 
 namespace crumple::fast {
@@ -27,7 +25,7 @@ int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores,
   int done = 0;
   for (int e : restores) {
     const SplitRecord& r = m.records[m.E[e].record];
-    if (std::any_of(r.t.begin(), r.t.end(), [&](int t) { return stamps.touched(t); }) || !sim.can_restore(e)) continue;
+    if (stamps.any_touched(r.t) || !sim.can_restore(e)) continue;
     const auto t = r.t;
     append_live(r.k.begin(), r.k.end(), touched);
     sim.restore_edge(e);

@@ -135,6 +135,16 @@ void SplitRounds::touched(std::vector<int>& out) const {
   }
 }
 
+std::vector<SplitRounds::Applied> SplitRounds::applied() const {
+  std::vector<Applied> out;
+  for (std::size_t k = 0; k < plans_.size(); ++k) {
+    if (!applied_[k]) continue;
+    const SplitPlan& p = plans_[k];
+    out.push_back({accepted_[k].candidate, round_of_[k], {p.ends[0], p.ends[1], p.ends[2], p.ends[3], p.n}});
+  }
+  return out;
+}
+
 // The rounds, each a parallel loop over its splits (in event order within the round).
 int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
   const Topology& m = sim.topo_;

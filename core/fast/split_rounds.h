@@ -9,6 +9,7 @@
 // lists) and run in parallel, while every vertex still receives its edits in event order.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,13 @@ class SplitRounds {
   void touched(std::vector<int>& out) const;
   /// Rounds so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_rounds() const { return large_rounds_; }
+  /// One split the last apply() applied: its place in the pass's split events, its round (1
+  /// first) and its vertices i, j, l, r, n (-1: none), for tests of the rounds.
+  struct Applied {
+    int event, round;
+    std::array<int, 5> verts;
+  };
+  std::vector<Applied> applied() const;
 
  private:
   int plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);

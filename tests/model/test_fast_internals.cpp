@@ -485,6 +485,30 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
   }
 }
 
+// Events of one pass applied in groups that run in parallel (split rounds, restore waves): no
+// two events of a group share a vertex, and the events at each vertex come in event order
+// across the groups. Returns the events in later groups (those that waited). T has event,
+// verts and the group as member `group`.
+template <class T, class Group>
+long check_vertex_disjoint_groups(std::vector<T> events, Group group, int frame) {
+  std::sort(events.begin(), events.end(),
+            [&](const T& a, const T& b) { return std::pair(group(a), a.event) < std::pair(group(b), b.event); });
+  std::map<int, std::pair<int, int>> last;  // vertex -> group and event of its latest event so far
+  long later = 0;
+  for (const T& r : events) {
+    for (int v : r.verts) {
+      if (v < 0) continue;
+      if (auto it = last.find(v); it != last.end()) {
+        EXPECT_LT(it->second.first, group(r)) << "two events of one group at vertex " << v << ", frame " << frame;
+        EXPECT_LT(it->second.second, r.event) << "events out of event order at vertex " << v << ", frame " << frame;
+      }
+      last[v] = {group(r), r.event};
+    }
+    later += group(r) > group(events.front());
+  }
+  return later;
+}
+
 // The waves' own rule, which the comparison above cannot see: restores that share a vertex give
 // the serial result even in one wave whenever the wave runs them in event order, as it does on
 // one thread. No two restores of a wave share a vertex, and the restores at each vertex come in
@@ -493,27 +517,33 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
 TEST(FastTopology, RestoreWavesShareNoVertexAndKeepEventOrder) {
   fast::FastSimulator sim(make_grid(48), Params{}, 2);
   long applied = 0, later_waves = 0;
-  for (int f = 0; f < 110; ++f) {
+  for (int f = 0; f < 110 && !HasFailure(); ++f) {
     sim.step();
-    std::vector<fast::RestoreWaves::Applied> restores = sim.restore_waves_applied();
-    std::sort(restores.begin(), restores.end(),
-              [](const auto& a, const auto& b) { return std::pair(a.wave, a.event) < std::pair(b.wave, b.event); });
-    std::map<int, std::pair<int, int>> last;  // vertex -> wave and event of its latest restore so far
-    for (const auto& r : restores) {
-      for (int v : r.verts) {
-        if (v < 0) continue;
-        if (auto it = last.find(v); it != last.end()) {
-          ASSERT_LT(it->second.first, r.wave) << "two restores of one wave at vertex " << v << ", frame " << f;
-          ASSERT_LT(it->second.second, r.event) << "restores out of event order at vertex " << v << ", frame " << f;
-        }
-        last[v] = {r.wave, r.event};
-      }
-      later_waves += r.wave > 0;
-    }
+    const std::vector<fast::RestoreWaves::Applied> restores = sim.restore_waves_applied();
+    if (restores.empty()) continue;
+    later_waves += check_vertex_disjoint_groups(restores, [](const auto& r) { return r.wave; }, f);
     applied += long(restores.size());
   }
   EXPECT_GT(applied, 500);
   EXPECT_GT(later_waves, 20);  // restores did share vertices and wait
+}
+
+// The same rule for the split rounds (DECISIONS.md D13), which the comparison with the serial
+// edits sees only through races on two threads: a round rule that put every split in one round
+// passed ParallelRoundsAndWavesEqualSerialEdits. Catches rounds that ignore a vertex (a wing's,
+// say) or put every split in the first round.
+TEST(FastTopology, SplitRoundsShareNoVertexAndKeepEventOrder) {
+  fast::FastSimulator sim(make_grid(48), Params{}, 2);
+  long applied = 0, later_rounds = 0;
+  for (int f = 0; f < 110 && !HasFailure(); ++f) {
+    sim.step();
+    const std::vector<fast::SplitRounds::Applied> splits = sim.split_rounds_applied();
+    if (splits.empty()) continue;
+    later_rounds += check_vertex_disjoint_groups(splits, [](const auto& r) { return r.round; }, f);
+    applied += long(splits.size());
+  }
+  EXPECT_GT(applied, 3000);
+  EXPECT_GT(later_rounds, 300);  // splits did share vertices and wait
 }
 
 // A restore candidate's answer on the state after the pass's splits holds through the pass
