@@ -33,20 +33,10 @@ const CLI::Validator kSeed(
       return ok ? std::string() : std::string("must be an integer in [0, 18446744073709551615]");
     },
     "");
-}  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App cli{"crumple: real-time paper crumpling on an adaptive mass-spring mesh"};
-  cli.require_subcommand(1);
-  cli.set_version_flag("--version", std::string("crumple ") + version());
-  app::RunOptions o;
-  // --paper chooses the base that the other options change. It is found before parsing so that
-  // an option given with it wins in any order.
-  const bool paper = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--paper") == 0; });
-  o.params = paper ? paper_params() : default_params();
+// The sheet and the scene.
+void add_input_options(CLI::App* run, app::RunOptions& o) {
   Params& p = o.params;
-  CLI::App* run = cli.add_subcommand("run", "Simulate a sheet; optionally write stats.csv and OBJ frames");
-
   auto* grid = run->add_option("--grid", o.grid, "N x N vertex grid on the unit square")->capture_default_str();
   run->add_option("--mesh", o.mesh, "triangle mesh to crumple (OBJ)")->excludes(grid);
   run->add_flag("--fixed-diagonals", o.fixed_diagonals, "grid: one diagonal direction everywhere");
@@ -55,9 +45,14 @@ int main(int argc, char** argv) {
   run->add_option("--frame-dt", p.frame_dt, "seconds per frame (h = frame-dt / substeps)")->capture_default_str();
   run->add_option("--squeeze", p.squeeze, "free scene: initial scale about the centroid")->capture_default_str();
   run->add_option("--frames", o.frames, "frames of 1/60 s")->capture_default_str();
+}
+
+// How a step is taken, and where.
+void add_step_options(CLI::App* run, app::RunOptions& o) {
+  Params& p = o.params;
   run->add_option_function<std::string>(
          "--substeps",
-         [&p](const std::string& s) {
+         [&p = o.params](const std::string& s) {
            int n = 0;
            const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), n);
            p.auto_substeps = s == "auto";
@@ -72,7 +67,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   run->add_option_function<std::string>(
          "--adapt",
-         [&p](const std::string& s) {
+         [&p = o.params](const std::string& s) {
            if (s != "step" && s != "frame") throw CLI::ValidationError("--adapt", "must be step or frame, got '" + s + "'");
            p.adapt_per_frame = s == "frame";
          },
@@ -93,6 +88,10 @@ int main(int argc, char** argv) {
   run->add_option("--cg-tolerance", p.cg_tolerance, "implicit: CG relative tolerance")->capture_default_str();
   run->add_option("--backend", o.backend, "backend")->check(CLI::IsMember(backend_names()))->capture_default_str();
   run->add_option("--threads", o.threads, "worker threads")->capture_default_str();
+}
+
+// The model's coefficients and switches (MODEL.md), the seed and the scene's sphere.
+void add_model_options(CLI::App* run, Params& p) {
   run->add_option("--seed", p.seed, "seed of the random stream")->check(kSeed)->capture_default_str();
   run->add_option("--kappa", p.kappa, "stiffness per unit mass [Eq 5]")->capture_default_str();
   run->add_option("--bend", p.bend, "bending coefficient per unit mass [Eq 9]")->capture_default_str();
@@ -118,10 +117,32 @@ int main(int argc, char** argv) {
   run->add_option("--sphere-start", p.sphere_start, "R0 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-end", p.sphere_end, "R1 / distance of the farthest vertex")->capture_default_str();
   run->add_option("--sphere-time", p.sphere_time, "seconds to shrink from R0 to R1")->capture_default_str();
+}
+
+void add_output_options(CLI::App* run, app::RunOptions& o) {
   run->add_option("--out", o.out, "output folder: stats.csv, final.obj");
   run->add_flag("--force", o.force, "--out may be a non-empty folder: replace crumple's files in it");
   run->add_option("--every", o.every, "also write every K-th frame as frame_NNNNN.obj")->capture_default_str();
   run->add_flag("--quiet", o.quiet, "no progress bar and no summary");
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App cli{"crumple: real-time paper crumpling on an adaptive mass-spring mesh"};
+  cli.require_subcommand(1);
+  cli.set_version_flag("--version", std::string("crumple ") + version());
+  app::RunOptions o;
+  // --paper chooses the base that the other options change. It is found before parsing so that
+  // an option given with it wins in any order.
+  const bool paper = std::any_of(argv + 1, argv + argc, [](const char* a) { return std::strcmp(a, "--paper") == 0; });
+  o.params = paper ? paper_params() : default_params();
+  Params& p = o.params;
+  CLI::App* run = cli.add_subcommand("run", "Simulate a sheet; optionally write stats.csv and OBJ frames");
+
+  add_input_options(run, o);
+  add_step_options(run, o);
+  add_model_options(run, p);
+  add_output_options(run, o);
   bool paper_given = false;  // read before parsing (above); declared so that --help lists it
   run->add_flag("--paper", paper_given, "start from the paper's configuration (approx, one step per frame, no viscosity, "
                 "fracture after every step) instead of the default (docs/DECISIONS.md D28)");

@@ -22,6 +22,52 @@ double norm(const D3& a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); 
 // rounded, where pow is within about half an ulp and costs some hundred instructions a call.
 double root_of_delta(double delta, double varphi) { return varphi == 2.0 ? std::sqrt(delta) : std::pow(delta, 1.0 / varphi); }
 
+// nu of [Eq 7]: the mean of the adjacent faces' unit normals, or of the vertex normals of i and
+// j where those cancel (0 where both do).
+D3 split_direction(const Triangles& T, int tL, int tR, Float4 ni, Float4 nj) {
+  D3 nu;
+  for (int t : {tL, tR}) {
+    if (t < 0) continue;
+    const D3 w{T.area[t].x, T.area[t].y, T.area[t].z};
+    const double len = norm(w);
+    if (len > 0) nu = {nu.x + w.x / len, nu.y + w.y / len, nu.z + w.z / len};
+  }
+  if (!(norm(nu) > 1e-12)) nu = {double(ni.x) + nj.x, double(ni.y) + nj.y, double(ni.z) + nj.z};
+  const double nlen = norm(nu);
+  return nlen > 1e-12 ? D3{nu.x / nlen, nu.y / nlen, nu.z / nlen} : D3{};
+}
+
+// What a split takes from the vertices of N = rec.k: [Eq 3] each gives up part of its mass
+// (kept in rec.delta and rec.dm for the restore), and the new vertex gets the sum with its
+// momentum [Eq 4]. dist holds |X_k - X_n| of each k in N.
+struct SplitMasses {
+  std::array<double, 4> dist{};
+  double mn = 0;
+  D3 pn;
+};
+SplitMasses split_masses(Vertices& V, SplitRecord& rec, const D3& Xn, double varphi) {
+  SplitMasses out;
+  double dsum = 0;
+  for (int q = 0; q < 4; ++q) {
+    if (rec.k[q] < 0) continue;
+    const Float4 Xk = V.rest[rec.k[q]];
+    out.dist[q] = norm({Xk.x - Xn.x, Xk.y - Xn.y, Xk.z - Xn.z});
+    dsum += out.dist[q];
+  }
+  for (int q = 0; q < 4; ++q) {
+    const int k = rec.k[q];
+    if (k < 0) continue;
+    rec.delta[q] = out.dist[q] / dsum;
+    const float m_new = float(0.5 * (root_of_delta(rec.delta[q], varphi) + 1.0) * V.mass(k));
+    rec.dm[q] = double(V.mass(k) - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
+    V.set_mass(k, m_new);
+    out.mn += rec.dm[q];
+    const Float4 vk = V.vm[k];
+    out.pn = {out.pn.x + rec.dm[q] * vk.x, out.pn.y + rec.dm[q] * vk.y, out.pn.z + rec.dm[q] * vk.z};
+  }
+  return out;
+}
+
 // Corner of v in triangle t (0, 1 or 2; t has v as a corner).
 int corner_of(const Triangles& T, int t, int v) {
   const Face& f = T[t];
@@ -220,18 +266,9 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   const D3 d{xj.x - xi.x, xj.y - xi.y, xj.z - xi.z};
   const double lt = norm(d), l0 = m.E[e].l0;
 
-  // [Eq 7] x_n = (x_i + x_j)/2 + s theta nu; nu from the adjacent face normals.
-  D3 nu;
-  for (int t : {tL, tR}) {
-    if (t < 0) continue;
-    const D3 w{m.T.area[t].x, m.T.area[t].y, m.T.area[t].z};
-    const double len = norm(w);
-    if (len > 0) nu = {nu.x + w.x / len, nu.y + w.y / len, nu.z + w.z / len};
-  }
+  // [Eq 7] x_n = (x_i + x_j)/2 + s theta nu.
   const Float4 ni = V.nr[i], nj = V.nr[j];
-  if (!(norm(nu) > 1e-12)) nu = {double(ni.x) + nj.x, double(ni.y) + nj.y, double(ni.z) + nj.z};
-  const double nlen = norm(nu);
-  nu = nlen > 1e-12 ? D3{nu.x / nlen, nu.y / nlen, nu.z / nlen} : D3{};
+  const D3 nu = split_direction(m.T, tL, tR, ni, nj);
   const double theta = 0.5 * params_.psi * std::sqrt(std::max(0.0, l0 * l0 - lt * lt));
   const double curl = (double(nj.x) - ni.x) * d.x + (double(nj.y) - ni.y) * d.y + (double(nj.z) - ni.z) * d.z;
   const double s = std::abs(curl) <= 1e-6 * lt ? (flat_draw < 0.5f ? -1.0 : 1.0) : (curl > 0 ? 1.0 : -1.0);
@@ -242,27 +279,7 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   SplitRecord rec;
   rec.k = {i, j, l, r};
   rec.l0 = l0;
-  std::array<double, 4> dist{};  // |X_k - X_n| of each k in N
-  double dsum = 0;
-  for (int q = 0; q < 4; ++q) {
-    if (rec.k[q] < 0) continue;
-    const Float4 Xk = V.rest[rec.k[q]];
-    dist[q] = norm({Xk.x - Xn.x, Xk.y - Xn.y, Xk.z - Xn.z});
-    dsum += dist[q];
-  }
-  double mn = 0;
-  D3 pn;
-  for (int q = 0; q < 4; ++q) {
-    const int k = rec.k[q];
-    if (k < 0) continue;
-    rec.delta[q] = dist[q] / dsum;
-    const float m_new = float(0.5 * (root_of_delta(rec.delta[q], params_.varphi) + 1.0) * V.mass(k));
-    rec.dm[q] = double(V.mass(k) - m_new);  // exact in float (Sterbenz: m_new >= m_k / 2)
-    V.set_mass(k, m_new);
-    mn += rec.dm[q];
-    const Float4 vk = V.vm[k];
-    pn = {pn.x + rec.dm[q] * vk.x, pn.y + rec.dm[q] * vk.y, pn.z + rec.dm[q] * vk.z};
-  }
+  const auto [dist, mn, pn] = split_masses(V, rec, Xn, params_.varphi);
 
   const int n = plan.n;
   m.init_vertex(n);

@@ -262,12 +262,15 @@ bool layout_stale(const Topology& m, double fraction) {
   return double(m.V.created) >= fraction * m.V.size();
 }
 
-void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
-  Vertices& V = m.V;
-  Edges& E = m.E;
-  Triangles& T = m.T;
+namespace {
+/// The new slot orders and their inverses (s.vnew[old] = new): vertices along the Morton curve,
+/// then edges by their lower endpoint's new slot and triangles by their lowest corner's
+/// (counting sorts), dead elements last.
+void slot_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
+  const Vertices& V = m.V;
+  const Edges& E = m.E;
+  const Triangles& T = m.T;
   const int nv = V.size(), ne = E.size(), nt = T.size();
-
   vertex_order(par, V, s);
   inverse(par, s.vorder, s.vnew);
   const std::vector<int>& vnew = s.vnew;
@@ -284,62 +287,84 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   });
   counting_order(par, s, nv + 1, s.torder);
   inverse(par, s.torder, s.tnew);
-  const std::vector<int>&vorder = s.vorder, &eorder = s.eorder, &torder = s.torder, &enew = s.enew, &tnew = s.tnew;
+}
 
-  auto vmap = [&](std::int32_t v) { return v >= 0 ? std::int32_t(vnew[v]) : v; };
-  auto emap = [&](std::int32_t e) { return e >= 0 ? std::int32_t(enew[e]) : e; };
-  auto tmap = [&](std::int32_t t) { return t >= 0 ? std::int32_t(tnew[t]) : t; };
+/// Old slot -> new slot of each kind (-1, "none", stays -1).
+struct Renames {
+  const std::vector<int>&vnew, &enew, &tnew;
+  std::int32_t v(std::int32_t x) const { return x >= 0 ? std::int32_t(vnew[x]) : x; }
+  std::int32_t e(std::int32_t x) const { return x >= 0 ? std::int32_t(enew[x]) : x; }
+  std::int32_t t(std::int32_t x) const { return x >= 0 ? std::int32_t(tnew[x]) : x; }
+};
 
-  // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
-  // next step before anything reads them), then the adjacency lists with their entries renamed.
-  // Groups of distinct element types (one spare buffer per type).
+// Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
+// next step before anything reads them), then the adjacency lists with their entries renamed.
+// Groups of distinct element types (one spare buffer per type).
+void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Renames& to) {
+  const std::vector<int>& vorder = s.vorder;
   permute(par, s, vorder, gathered(V.xm), gathered(V.spring_list), gathered(V.lid));
   permute(par, s, vorder, gathered(V.vm), gathered(V.tri_list));
   permute(par, s, vorder, gathered(V.nr));
   permute(par, s, vorder, gathered(V.rest));
-  repack(par, s, V.springs, V.nbrs, V.spring_list, [&](std::int32_t x) { return (enew[x >> 1] << 1) | (x & 1); },
-         vmap);
-  repack(par, s, V.tris, V.wings, V.tri_list, [&](std::int32_t x) { return (tnew[x >> 2] << 2) | (x & 3); }, emap);
+  repack(par, s, V.springs, V.nbrs, V.spring_list, [&](std::int32_t x) { return (to.enew[x >> 1] << 1) | (x & 1); },
+         [&](std::int32_t x) { return to.v(x); });
+  repack(par, s, V.tris, V.wings, V.tri_list, [&](std::int32_t x) { return (to.tnew[x >> 2] << 2) | (x & 3); },
+         [&](std::int32_t x) { return to.e(x); });
   V.garbage_e = V.garbage_t = 0;
+}
 
-  // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
-  // itself, as the topology's convention says.
-  permute(par, s, eorder,
+// Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
+// itself, as the topology's convention says.
+void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Renames& to) {
+  permute(par, s, s.eorder,
           gathered(E.slots,
                    [&](EdgeRecord r, int) {
-                     if (r.flags & kAlive) r.a = vmap(r.a), r.b = vmap(r.b);
+                     if (r.flags & kAlive) r.a = to.v(r.a), r.b = to.v(r.b);
                      else r.a = r.b = 0;
-                     r.wl = vmap(r.wl), r.wr = vmap(r.wr), r.tri0 = tmap(r.tri0), r.tri1 = tmap(r.tri1);
+                     r.wl = to.v(r.wl), r.wr = to.v(r.wr), r.tri0 = to.t(r.tri0), r.tri1 = to.t(r.tri1);
                      return r;
                    }),
           gathered(E.lid));
+}
 
-  // Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
-  // per-step values that compute_normals writes for every slot before anything reads them.
+// Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
+// per-step values that compute_normals writes for every slot before anything reads them.
+void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Renames& to) {
   const std::uint8_t* old_alive = T.alive.data();
-  permute(par, s, torder,
+  permute(par, s, s.torder,
           gathered(T.slots,
                    [&](Face f, int from) {
                      const bool alive = old_alive[from];
-                     for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = emap(f.e[k]);
+                     for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(to.vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = to.e(f.e[k]);
                      return f;
                    }),
           gathered(T.lid), gathered(T.alive));
+}
 
-  // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
-  par.run(int(m.records.size()), kGrain, [&](int b, int e) {
+// Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
+void rename_records(Array<SplitRecord>& records, const Parallel& par, const Renames& to) {
+  par.run(int(records.size()), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
-      SplitRecord& r = m.records[k];
-      r.n = vmap(r.n);
-      for (int q = 0; q < 4; ++q) r.k[q] = vmap(r.k[q]), r.e[q] = emap(r.e[q]), r.t[q] = tmap(r.t[q]);
+      SplitRecord& r = records[k];
+      r.n = to.v(r.n);
+      for (int q = 0; q < 4; ++q) r.k[q] = to.v(r.k[q]), r.e[q] = to.e(r.e[q]), r.t[q] = to.t(r.t[q]);
     }
   });
+}
+}  // namespace
 
+void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
+  slot_orders(m, par, s);
+  const Renames to{s.vnew, s.enew, s.tnew};
+  move_vertices(m.V, par, s, to);
+  move_edges(m.E, par, s, to);
+  move_triangles(m.T, par, s, to);
+  rename_records(m.records, par, to);
   // The inverse maps; free lists hold logical ids and do not change.
-  inverse(par, V.lid, V.phys);
-  inverse(par, E.lid, E.phys);
-  inverse(par, T.lid, T.phys);
-  V.created = 0;
+  inverse(par, m.V.lid, m.V.phys);
+  inverse(par, m.E.lid, m.E.phys);
+  inverse(par, m.T.lid, m.T.phys);
+  m.V.created = 0;
 }
 
 }  // namespace crumple::fast

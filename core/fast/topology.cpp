@@ -376,95 +376,130 @@ std::string Topology::check_blocks() const {
   return {};
 }
 
+namespace {
+/// The parts written one after the other: a check's one-line finding.
+template <class... P>
+std::string describe(const P&... parts) {
+  std::ostringstream out;
+  (out << ... << parts);
+  return out.str();
+}
+}  // namespace
+
 std::string Topology::check() const {
-  if (std::string blocks = check_blocks(); !blocks.empty()) return blocks;
-  std::ostringstream err;
-  auto fail = [&](auto&&... parts) {
-    (err << ... << parts);
-    return err.str();
-  };
-  // Logical ids and slots are inverse maps of each other, over the same range.
+  // In this order: each part reads only what the parts before it found consistent.
+  std::vector<char> dead_v, free_e;
+  std::string found = check_blocks();
+  if (found.empty()) found = check_ids(dead_v, free_e);
+  if (found.empty()) found = check_triangles(dead_v);
+  if (found.empty()) found = check_edges(dead_v, free_e);
+  if (found.empty()) found = check_vertices(dead_v);
+  if (!found.empty()) return found;
+  const int chi = live_vertices() - live_mesh_edges() + live_triangles();
+  if (chi != euler) return describe("Euler characteristic ", chi, " differs from the input's ", euler);
+  return {};
+}
+
+// Logical ids and slots are inverse maps of each other, over the same range; the free lists.
+std::string Topology::check_ids(std::vector<char>& dead_v, std::vector<char>& free_e) const {
   auto bijective = [](const auto& lid, const auto& phys) {
     if (lid.size() != phys.size()) return false;
     for (std::size_t k = 0; k < lid.size(); ++k)
       if (lid[k] < 0 || std::size_t(lid[k]) >= phys.size() || phys[std::size_t(lid[k])] != std::int32_t(k)) return false;
     return true;
   };
-  if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return fail("vertex logical ids are not a bijection");
-  if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return fail("edge logical ids are not a bijection");
-  if (!bijective(T.lid, T.phys) || T.lid.size() != T.slots.size()) return fail("triangle logical ids are not a bijection");
-  std::vector<char> vertex_dead(V.size(), 0), edge_free(E.size(), 0), triangle_free(T.size(), 0);
-  for (int v : V.free_ids) vertex_dead[V.phys[v]] = 1;
-  for (int e : E.free_ids) edge_free[E.phys[e]] = 1;
+  if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return "vertex logical ids are not a bijection";
+  if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return "edge logical ids are not a bijection";
+  if (!bijective(T.lid, T.phys) || T.lid.size() != T.slots.size()) return "triangle logical ids are not a bijection";
+  dead_v.assign(std::size_t(V.size()), 0), free_e.assign(std::size_t(E.size()), 0);
+  std::vector<char> free_t(std::size_t(T.size()), 0);
+  for (int v : V.free_ids) dead_v[V.phys[v]] = 1;
+  for (int e : E.free_ids) free_e[E.phys[e]] = 1;
   // The free triangle ids are exactly the dead slots', each once, and a dead slot is kNoFace
   // (the render buffers count live triangles from the free list and skip faces without sides).
   for (int id : T.free_ids) {
-    if (id < 0 || id >= T.size() || triangle_free[T.phys[id]]) return fail("triangle free list holds bad id ", id);
-    triangle_free[T.phys[id]] = 1;
+    if (id < 0 || id >= T.size() || free_t[T.phys[id]]) return describe("triangle free list holds bad id ", id);
+    free_t[T.phys[id]] = 1;
   }
   for (int t = 0; t < T.size(); ++t) {
-    if (bool(triangle_free[t]) == bool(T.alive[t])) return fail("triangle ", t, " is ", T.alive[t] ? "live on" : "dead off", " the free list");
-    if (!T.alive[t] && T[t].e != kNoFace.e) return fail("dead triangle ", t, " is not kNoFace");
+    if (bool(free_t[t]) == bool(T.alive[t])) return describe("triangle ", t, " is ", T.alive[t] ? "live on" : "dead off", " the free list");
+    if (!T.alive[t] && T[t].e != kNoFace.e) return describe("dead triangle ", t, " is not kNoFace");
   }
+  return {};
+}
+
+// Each live triangle's sides are live mesh edges that link back to it with the right wing, and
+// each corner lists it with the right opposite edge.
+std::string Topology::check_triangles(const std::vector<char>& dead_v) const {
   for (int t = 0; t < T.size(); ++t) {
     if (!T.alive[t]) continue;
     const auto v = T.corners(t);
     const std::array<int, 3>& es = T[t].e;
     for (int k = 0; k < 3; ++k) {
       const int p = v[k], q = v[(k + 1) % 3], e = es[k];
-      if (vertex_dead[p]) return fail("triangle ", t, " uses dead vertex ", p);
-      if (p == q || p == v[(k + 2) % 3]) return fail("triangle ", t, " repeats vertex ", p);
-      if (e < 0 || !(E[e].flags & kAlive) || !(E[e].flags & kMesh)) return fail("triangle ", t, " side ", k, " has no mesh edge");
+      if (dead_v[p]) return describe("triangle ", t, " uses dead vertex ", p);
+      if (p == q || p == v[(k + 2) % 3]) return describe("triangle ", t, " repeats vertex ", p);
+      if (e < 0 || !(E[e].flags & kAlive) || !(E[e].flags & kMesh)) return describe("triangle ", t, " side ", k, " has no mesh edge");
       const bool fwd = E[e].a == p && E[e].b == q, back = E[e].a == q && E[e].b == p;
-      if (!fwd && !back) return fail("edge ", e, " does not join triangle ", t, "'s side ", k);
-      if ((fwd ? E[e].tri0 : E[e].tri1) != t) return fail("edge ", e, " does not link back to triangle ", t);
-      if ((fwd ? E[e].wl : E[e].wr) != v[(k + 2) % 3]) return fail("edge ", e, " has a stale wing");
+      if (!fwd && !back) return describe("edge ", e, " does not join triangle ", t, "'s side ", k);
+      if ((fwd ? E[e].tri0 : E[e].tri1) != t) return describe("edge ", e, " does not link back to triangle ", t);
+      if ((fwd ? E[e].wl : E[e].wr) != v[(k + 2) % 3]) return describe("edge ", e, " has a stale wing");
       bool listed = false;
       const std::int32_t *s = tris_of(p), *w = wings_of(p);
       const int opposite = es[(k + 1) % 3];
       for (int j = 0; j < V.tri_list[p].count; ++j) listed |= s[j] == ((t << 2) | k) && w[j] == opposite;
-      if (!listed) return fail("triangle ", t, " is not listed at vertex ", p);
+      if (!listed) return describe("triangle ", t, " is not listed at vertex ", p);
     }
   }
+  return {};
+}
+
+// Each live edge joins two live vertices that list it once; an auxiliary edge has a record and
+// no triangle; a mesh edge has a live triangle, and no two join the same vertices.
+std::string Topology::check_edges(const std::vector<char>& dead_v, const std::vector<char>& free_e) const {
   std::set<std::pair<int, int>> pairs;
   for (int e = 0; e < E.size(); ++e) {
     const std::uint8_t f = E[e].flags;
     if (!(f & kAlive)) {
-      if (!edge_free[e]) return fail("dead edge ", e, " is not on the free list");
+      if (!free_e[e]) return describe("dead edge ", e, " is not on the free list");
       continue;
     }
     const int a = E[e].a, b = E[e].b;
-    if (a == b || vertex_dead[a] || vertex_dead[b]) return fail("edge ", e, " has a bad endpoint");
-    if (!(E[e].l0 > 0)) return fail("edge ", e, " has rest length ", E[e].l0);
+    if (a == b || dead_v[a] || dead_v[b]) return describe("edge ", e, " has a bad endpoint");
+    if (!(E[e].l0 > 0)) return describe("edge ", e, " has rest length ", E[e].l0);
     for (int end : {a, b}) {
       const std::int32_t* s = springs_of(end);
       const int want = (e << 1) | (end == b);
-      if (std::count(s, s + V.spring_list[end].count, want) != 1) return fail("edge ", e, " is not listed once at ", end);
+      if (std::count(s, s + V.spring_list[end].count, want) != 1) return describe("edge ", e, " is not listed once at ", end);
     }
     if (!(f & kMesh)) {
       if ((f & kBreakable) || E[e].tri0 >= 0 || E[e].tri1 >= 0 || E[e].record < 0)
-        return fail("auxiliary edge ", e, " is breakable, in a triangle or has no record");
+        return describe("auxiliary edge ", e, " is breakable, in a triangle or has no record");
       continue;
     }
-    if (E[e].tri0 < 0 && E[e].tri1 < 0) return fail("mesh edge ", e, " is in no triangle");
+    if (E[e].tri0 < 0 && E[e].tri1 < 0) return describe("mesh edge ", e, " is in no triangle");
     for (int t : {E[e].tri0, E[e].tri1})
-      if (t >= 0 && !T.alive[t]) return fail("edge ", e, " links dead triangle ", t);
-    if (!pairs.insert({std::min(a, b), std::max(a, b)}).second) return fail("two mesh edges join ", a, " and ", b);
+      if (t >= 0 && !T.alive[t]) return describe("edge ", e, " links dead triangle ", t);
+    if (!pairs.insert({std::min(a, b), std::max(a, b)}).second) return describe("two mesh edges join ", a, " and ", b);
   }
+  return {};
+}
+
+// Each vertex's two mass copies agree; a live one has a positive mass, a triangle, and springs
+// that name it and their other end.
+std::string Topology::check_vertices(const std::vector<char>& dead_v) const {
   for (int v = 0; v < V.size(); ++v) {
-    if (!(V.vm[v].w == V.xm[v].w)) return fail("vertex ", v, " has two masses ", V.xm[v].w, " and ", V.vm[v].w);
-    if (vertex_dead[v]) continue;
-    if (!(V.mass(v) > 0) || !std::isfinite(V.mass(v))) return fail("vertex ", v, " has mass ", V.mass(v));
-    if (V.tri_list[v].count == 0) return fail("vertex ", v, " is in no triangle");
+    if (!(V.vm[v].w == V.xm[v].w)) return describe("vertex ", v, " has two masses ", V.xm[v].w, " and ", V.vm[v].w);
+    if (dead_v[v]) continue;
+    if (!(V.mass(v) > 0) || !std::isfinite(V.mass(v))) return describe("vertex ", v, " has mass ", V.mass(v));
+    if (V.tri_list[v].count == 0) return describe("vertex ", v, " is in no triangle");
     const std::int32_t *s = springs_of(v), *nb = nbrs_of(v);
     for (int k = 0; k < V.spring_list[v].count; ++k) {
       const int e = s[k] >> 1;
       if (!(E[e].flags & kAlive) || (s[k] & 1 ? E[e].b : E[e].a) != v || (s[k] & 1 ? E[e].a : E[e].b) != nb[k])
-        return fail("vertex ", v, " lists a bad spring");
+        return describe("vertex ", v, " lists a bad spring");
     }
   }
-  const int chi = live_vertices() - live_mesh_edges() + live_triangles();
-  if (chi != euler) return fail("Euler characteristic ", chi, " differs from the input's ", euler);
   return {};
 }
 

@@ -251,7 +251,13 @@ class Topology {
   void list_spring(int v, int entry, int other);
   void unlist_spring(int v, int entry);
   void move_block(int v, bool springs, int need);  ///< v's list to a new block of room >= need
-  std::string check_blocks() const;                 ///< empty if the pools are consistent
+  // The parts of check(), each empty if its part is consistent. dead_v and free_e mark the dead
+  // vertex slots and the edge slots on the free list (check_ids fills them).
+  std::string check_blocks() const;
+  std::string check_ids(std::vector<char>& dead_v, std::vector<char>& free_e) const;
+  std::string check_triangles(const std::vector<char>& dead_v) const;
+  std::string check_edges(const std::vector<char>& dead_v, const std::vector<char>& free_e) const;
+  std::string check_vertices(const std::vector<char>& dead_v) const;
 };
 
 }  // namespace crumple::fast

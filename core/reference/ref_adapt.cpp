@@ -27,6 +27,74 @@ bool is_triangle(const Mesh& m, int t, int a, int b, int c) {
     if (v[k] == a && v[(k + 1) % 3] == b && v[(k + 2) % 3] == c) return true;
   return false;
 }
+
+// nu of [Eq 7]: the mean of the unit normals of the edge's faces tL and tR (-1: none), or of
+// the vertex normals ni and nj where those cancel (zero where both do).
+V3 split_direction(const Mesh& m, int tL, int tR, const V3& ni, const V3& nj) {
+  V3 nu = V3::Zero();
+  for (int t : {tL, tR}) {
+    if (t < 0) continue;
+    const auto& v = m.tris[t].v;
+    const V3 w = (m.verts[v[1]].x - m.verts[v[0]].x).cross(m.verts[v[2]].x - m.verts[v[0]].x);
+    if (w.norm() > 0) nu += w.normalized();
+  }
+  if (!(nu.norm() > 1e-12)) nu = ni + nj;
+  if (nu.norm() > 1e-12) nu.normalize(); else nu.setZero();
+  return nu;
+}
+
+// [Eq 3]: each vertex of N = rec.k (-1: none) gives up part of its mass, kept in rec.delta and
+// rec.dm; [Eq 4]: mn and pn are the new vertex's mass and momentum, their sums.
+void split_masses(Mesh& m, SplitRecord& rec, const V3& Xn, double varphi, double& mn, V3& pn) {
+  double dsum = 0;
+  for (int q = 0; q < 4; ++q)
+    if (rec.k[q] >= 0) dsum += (m.verts[rec.k[q]].X - Xn).norm();
+  for (int q = 0; q < 4; ++q) {
+    if (rec.k[q] < 0) continue;
+    Vertex& K = m.verts[rec.k[q]];
+    rec.delta[q] = (K.X - Xn).norm() / dsum;
+    const double m_new = 0.5 * (std::pow(rec.delta[q], 1.0 / varphi) + 1.0) * K.m;
+    rec.dm[q] = K.m - m_new;
+    K.m = m_new;
+    mn += rec.dm[q];
+    pn += rec.dm[q] * K.v;
+  }
+}
+
+// The split's topology around the new vertex rec.n: (i,j,l), (j,i,r) -> (i,n,l), (n,j,l),
+// (j,n,r), (n,i,r); edge e becomes auxiliary at its current length lt. Fills rec.e and rec.t;
+// false if a triangle could not be attached.
+bool split_topology(Mesh& m, int e, SplitRecord& rec, double lt) {
+  const int i = rec.k[0], j = rec.k[1], l = rec.k[2], r = rec.k[3], nv = rec.n;
+  const int tL = m.edges[e].tri[0], tR = m.edges[e].tri[1];
+  const double l0 = rec.l0;
+  const V3 Xn = m.verts[nv].X;
+  for (int t : {tL, tR})
+    if (t >= 0) m.detach(t);
+  Edge& E = m.edges[e];
+  E.auxiliary = true;
+  E.breakable = false;
+  E.tri = {-1, -1};
+  E.l0 = lt;  // holds the crease ("maintains the damage")
+  rec.e[0] = m.new_edge(i, nv, l0 / 2);
+  rec.e[1] = m.new_edge(nv, j, l0 / 2);
+  if (l >= 0) rec.e[2] = m.new_edge(l, nv, (m.verts[l].X - Xn).norm());
+  if (r >= 0) rec.e[3] = m.new_edge(nv, r, (m.verts[r].X - Xn).norm());
+  if (tL >= 0) rec.t[0] = tL, rec.t[1] = m.new_triangle();
+  if (tR >= 0) rec.t[2] = tR, rec.t[3] = m.new_triangle();
+  bool ok = true;
+  if (tL >= 0) {
+    const auto v = replaced(m.tris[tL], j, nv);
+    ok &= m.attach(tL, v[0], v[1], v[2]);
+    ok &= m.attach(rec.t[1], nv, j, l);
+  }
+  if (tR >= 0) {
+    const auto v = replaced(m.tris[tR], i, nv);
+    ok &= m.attach(tR, v[0], v[1], v[2]);
+    ok &= m.attach(rec.t[3], nv, i, r);
+  }
+  return ok;
+}
 }  // namespace
 
 void ReferenceSimulator::update_kappa(int v) {
@@ -69,15 +137,7 @@ bool ReferenceSimulator::split_edge(int e, const std::vector<V3>& n, double flat
   const double lt = (xi - xj).norm(), l0 = E0.l0;
 
   // [Eq 7] x_n = (x_i + x_j)/2 + s theta nu, theta = (psi/2) sqrt(l0^2 - lt^2).
-  V3 nu = V3::Zero();
-  for (int t : {tL, tR}) {
-    if (t < 0) continue;
-    const auto& v = mesh_.tris[t].v;
-    const V3 w = (mesh_.verts[v[1]].x - mesh_.verts[v[0]].x).cross(mesh_.verts[v[2]].x - mesh_.verts[v[0]].x);
-    if (w.norm() > 0) nu += w.normalized();
-  }
-  if (!(nu.norm() > 1e-12)) nu = n[i] + n[j];
-  if (nu.norm() > 1e-12) nu.normalize(); else nu.setZero();
+  const V3 nu = split_direction(mesh_, tL, tR, n[i], n[j]);
   const double theta = 0.5 * params_.psi * std::sqrt(std::max(0.0, l0 * l0 - lt * lt));
   const double curl = (n[j] - n[i]).dot(xj - xi);
   const double s = std::abs(curl) <= 1e-6 * lt ? (flat_draw < 0.5 ? -1.0 : 1.0) : (curl > 0 ? 1.0 : -1.0);
@@ -87,60 +147,18 @@ bool ReferenceSimulator::split_edge(int e, const std::vector<V3>& n, double flat
   SplitRecord rec;
   rec.k = {i, j, l, r};
   rec.l0 = l0;
-  double dsum = 0;
-  for (int q = 0; q < 4; ++q)
-    if (rec.k[q] >= 0) dsum += (mesh_.verts[rec.k[q]].X - Xn).norm();
   double mn = 0;
   V3 pn = V3::Zero();
-  for (int q = 0; q < 4; ++q) {
-    if (rec.k[q] < 0) continue;
-    Vertex& K = mesh_.verts[rec.k[q]];
-    rec.delta[q] = (K.X - Xn).norm() / dsum;
-    const double m_new = 0.5 * (std::pow(rec.delta[q], 1.0 / params_.varphi) + 1.0) * K.m;
-    rec.dm[q] = K.m - m_new;
-    K.m = m_new;
-    mn += rec.dm[q];
-    pn += rec.dm[q] * K.v;
-  }
+  split_masses(mesh_, rec, Xn, params_.varphi, mn, pn);
 
-  // Topology: (i,j,l), (j,i,r) -> (i,n,l), (n,j,l), (j,n,r), (n,i,r); e_ij becomes auxiliary.
   const int nv = mesh_.new_vertex();
   Vertex& N = mesh_.verts[nv];
   N.X = Xn;
   N.x = 0.5 * (xi + xj) + s * theta * nu;
   N.m = mn;
   N.v = pn / mn;
-  for (int t : {tL, tR})
-    if (t >= 0) mesh_.detach(t);
-  Edge& E = mesh_.edges[e];
-  E.auxiliary = true;
-  E.breakable = false;
-  E.tri = {-1, -1};
-  E.l0 = lt;  // holds the crease ("maintains the damage")
   rec.n = nv;
-  rec.e[0] = mesh_.new_edge(i, nv, l0 / 2);
-  rec.e[1] = mesh_.new_edge(nv, j, l0 / 2);
-  if (l >= 0) rec.e[2] = mesh_.new_edge(l, nv, (mesh_.verts[l].X - Xn).norm());
-  if (r >= 0) rec.e[3] = mesh_.new_edge(nv, r, (mesh_.verts[r].X - Xn).norm());
-  if (tL >= 0) {
-    rec.t[0] = tL;
-    rec.t[1] = mesh_.new_triangle();
-  }
-  if (tR >= 0) {
-    rec.t[2] = tR;
-    rec.t[3] = mesh_.new_triangle();
-  }
-  bool ok = true;
-  if (tL >= 0) {
-    const auto v = replaced(mesh_.tris[tL], j, nv);
-    ok &= mesh_.attach(tL, v[0], v[1], v[2]);
-    ok &= mesh_.attach(rec.t[1], nv, j, l);
-  }
-  if (tR >= 0) {
-    const auto v = replaced(mesh_.tris[tR], i, nv);
-    ok &= mesh_.attach(tR, v[0], v[1], v[2]);
-    ok &= mesh_.attach(rec.t[3], nv, i, r);
-  }
+  const bool ok = split_topology(mesh_, e, rec, lt);
   mesh_.edges[e].split = rec;
   for (int k : rec.k)
     if (k >= 0) update_kappa(k);

@@ -148,6 +148,26 @@ void ReferenceSimulator::integrate_explicit(double h, const std::vector<V3>& f) 
   }
 }
 
+namespace {
+// Pinned vertices (rows row[k] of the system's triplets and right-hand side b): their rows and
+// columns become the identity with dv = 0 (a fixed vertex).
+void pin_rows(const std::vector<int>& pinned, const std::vector<int>& row, std::vector<Eigen::Triplet<double>>& trip,
+              Eigen::VectorXd& b) {
+  std::vector<char> fixed(std::size_t(b.size()), 0);
+  for (int k : pinned)
+    for (int d = 0; d < 3; ++d) fixed[std::size_t(3 * row[k] + d)] = 1;
+  std::vector<Eigen::Triplet<double>> kept;
+  for (const auto& t : trip)
+    if (!fixed[std::size_t(t.row())] && !fixed[std::size_t(t.col())]) kept.push_back(t);
+  for (Eigen::Index r = 0; r < b.size(); ++r)
+    if (fixed[std::size_t(r)]) {
+      kept.emplace_back(int(r), int(r), 1.0);
+      b(r) = 0;
+    }
+  trip.swap(kept);
+}
+}  // namespace
+
 // Baraff-Witkin implicit Euler, (M - h^2 df/dx - h df/dv) dv = h (f + h df/dx v), with the true
 // spring Jacobian -kappa_e [u u^T + (1 - l0/lt)(I - u u^T)] (the second term dropped when
 // compressed so the matrix stays definite); bending is explicit; the viscosity (D17) implicit
@@ -194,21 +214,7 @@ void ReferenceSimulator::integrate_implicit(double h, const std::vector<V3>& f) 
     b.segment<3>(3 * row[E.a]) += h * jv;
     b.segment<3>(3 * row[E.b]) -= h * jv;
   }
-  // Pinned vertices: their rows and columns become the identity with dv = 0 (a fixed vertex).
-  if (!scene_.pinned.empty()) {
-    std::vector<char> fixed(3 * n, 0);
-    for (int k : scene_.pinned)
-      for (int d = 0; d < 3; ++d) fixed[3 * row[k] + d] = 1;
-    std::vector<Eigen::Triplet<double>> kept;
-    for (const auto& t : trip)
-      if (!fixed[t.row()] && !fixed[t.col()]) kept.push_back(t);
-    for (int r = 0; r < 3 * n; ++r)
-      if (fixed[r]) {
-        kept.emplace_back(r, r, 1.0);
-        b(r) = 0;
-      }
-    trip.swap(kept);
-  }
+  if (!scene_.pinned.empty()) pin_rows(scene_.pinned, row, trip, b);
   Eigen::SparseMatrix<double> M(3 * n, 3 * n);
   M.setFromTriplets(trip.begin(), trip.end());
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;

@@ -1,6 +1,7 @@
 #include "reference/ref_mesh.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 #include <sstream>
 
@@ -107,77 +108,104 @@ int Mesh::live_triangles() const {
   return int(std::count_if(tris.begin(), tris.end(), [](const Triangle& t) { return t.alive; }));
 }
 
-std::string Mesh::check() const {
-  std::ostringstream err;
-  auto fail = [&](auto&&... parts) {
-    (err << ... << parts);
-    return err.str();
-  };
-  for (int t = 0; t < int(tris.size()); ++t) {
-    const Triangle& T = tris[t];
+namespace {
+/// The parts written one after the other: a check's one-line finding.
+template <class... P>
+std::string describe(const P&... parts) {
+  std::ostringstream out;
+  (out << ... << parts);
+  return out.str();
+}
+
+// Each live triangle's corners are live and distinct, and its sides live mesh edges that join
+// them and link back to it.
+std::string check_triangles(const Mesh& m) {
+  for (int t = 0; t < int(m.tris.size()); ++t) {
+    const Triangle& T = m.tris[t];
     if (!T.alive) continue;
     for (int k = 0; k < 3; ++k) {
       const int p = T.v[k], q = T.v[(k + 1) % 3], e = T.e[k];
-      if (p < 0 || p >= int(verts.size()) || !verts[p].alive)
-        return fail("triangle ", t, " uses dead vertex ", p);
+      if (p < 0 || p >= int(m.verts.size()) || !m.verts[p].alive)
+        return describe("triangle ", t, " uses dead vertex ", p);
       if (p == T.v[(k + 1) % 3] || p == T.v[(k + 2) % 3])
-        return fail("triangle ", t, " repeats vertex ", p);
-      if (e < 0 || !edges[e].alive || edges[e].auxiliary)
-        return fail("triangle ", t, " side ", k, " has no live mesh edge");
-      const Edge& E = edges[e];
+        return describe("triangle ", t, " repeats vertex ", p);
+      if (e < 0 || !m.edges[e].alive || m.edges[e].auxiliary)
+        return describe("triangle ", t, " side ", k, " has no live mesh edge");
+      const Edge& E = m.edges[e];
       const int side = (E.a == p && E.b == q) ? 0 : (E.a == q && E.b == p) ? 1 : -1;
-      if (side < 0) return fail("edge ", e, " does not join triangle ", t, "'s side ", k);
-      if (E.tri[side] != t) return fail("edge ", e, " does not link back to triangle ", t);
+      if (side < 0) return describe("edge ", e, " does not join triangle ", t, "'s side ", k);
+      if (E.tri[side] != t) return describe("edge ", e, " does not link back to triangle ", t);
     }
   }
+  return {};
+}
+
+// Each live edge joins two live vertices that list it once; an auxiliary edge is in no
+// triangle; a mesh edge is a side of its triangles, and no two join the same vertices.
+std::string check_edges(const Mesh& m) {
   std::set<std::pair<int, int>> pairs;
-  for (int e = 0; e < int(edges.size()); ++e) {
-    const Edge& E = edges[e];
+  for (int e = 0; e < int(m.edges.size()); ++e) {
+    const Edge& E = m.edges[e];
     if (!E.alive) continue;
-    if (E.a == E.b || !verts[E.a].alive || !verts[E.b].alive)
-      return fail("edge ", e, " has a bad endpoint");
+    if (E.a == E.b || !m.verts[E.a].alive || !m.verts[E.b].alive)
+      return describe("edge ", e, " has a bad endpoint");
     for (int end : {E.a, E.b}) {
-      const auto& l = verts[end].edges;
+      const auto& l = m.verts[end].edges;
       if (std::count(l.begin(), l.end(), e) != 1)
-        return fail("edge ", e, " is not listed once at vertex ", end);
+        return describe("edge ", e, " is not listed once at vertex ", end);
     }
-    if (!(E.l0 > 0) || !(E.kappa >= 0)) return fail("edge ", e, " has bad rest length or kappa");
+    if (!(E.l0 > 0) || !(E.kappa >= 0)) return describe("edge ", e, " has bad rest length or kappa");
     if (E.auxiliary) {
       if (E.breakable || E.tri[0] >= 0 || E.tri[1] >= 0)
-        return fail("auxiliary edge ", e, " is breakable or in a triangle");
+        return describe("auxiliary edge ", e, " is breakable or in a triangle");
       continue;
     }
-    if (E.tri[0] < 0 && E.tri[1] < 0) return fail("mesh edge ", e, " is in no triangle");
+    if (E.tri[0] < 0 && E.tri[1] < 0) return describe("mesh edge ", e, " is in no triangle");
     for (int s = 0; s < 2; ++s) {
       const int t = E.tri[s];
       if (t < 0) continue;
-      if (!tris[t].alive) return fail("edge ", e, " links dead triangle ", t);
-      const auto& tv = tris[t].v;
+      if (!m.tris[t].alive) return describe("edge ", e, " links dead triangle ", t);
+      const auto& tv = m.tris[t].v;
       bool found = false;
       for (int k = 0; k < 3; ++k)
-        found |= tris[t].e[k] == e && tv[k] == (s ? E.b : E.a) && tv[(k + 1) % 3] == (s ? E.a : E.b);
-      if (!found) return fail("edge ", e, " side ", s, " is not in triangle ", t);
+        found |= m.tris[t].e[k] == e && tv[k] == (s ? E.b : E.a) && tv[(k + 1) % 3] == (s ? E.a : E.b);
+      if (!found) return describe("edge ", e, " side ", s, " is not in triangle ", t);
     }
     if (!pairs.insert({std::min(E.a, E.b), std::max(E.a, E.b)}).second)
-      return fail("two mesh edges join ", E.a, " and ", E.b);
+      return describe("two mesh edges join ", E.a, " and ", E.b);
   }
-  for (int v = 0; v < int(verts.size()); ++v) {
-    const Vertex& V = verts[v];
+  return {};
+}
+
+// Each live vertex has a positive mass and lists only springs that touch it, one in a triangle;
+// the free lists hold only dead ids.
+std::string check_vertices(const Mesh& m) {
+  for (int v = 0; v < int(m.verts.size()); ++v) {
+    const Vertex& V = m.verts[v];
     if (!V.alive) continue;
-    if (!(V.m > 0) || !std::isfinite(V.m)) return fail("vertex ", v, " has mass ", V.m);
+    if (!(V.m > 0) || !std::isfinite(V.m)) return describe("vertex ", v, " has mass ", V.m);
     bool in_triangle = false;
     for (int e : V.edges) {
-      if (e < 0 || e >= int(edges.size()) || !edges[e].alive || (edges[e].a != v && edges[e].b != v))
-        return fail("vertex ", v, " lists a spring that does not touch it");
-      in_triangle |= !edges[e].auxiliary;
+      if (e < 0 || e >= int(m.edges.size()) || !m.edges[e].alive || (m.edges[e].a != v && m.edges[e].b != v))
+        return describe("vertex ", v, " lists a spring that does not touch it");
+      in_triangle |= !m.edges[e].auxiliary;
     }
-    if (!in_triangle) return fail("vertex ", v, " is in no triangle");
+    if (!in_triangle) return describe("vertex ", v, " is in no triangle");
   }
-  for (int f : free_verts) if (verts[f].alive) return fail("free vertex ", f, " is alive");
-  for (int f : free_edges) if (edges[f].alive) return fail("free edge ", f, " is alive");
-  for (int f : free_tris) if (tris[f].alive) return fail("free triangle ", f, " is alive");
+  for (int f : m.free_verts) if (m.verts[f].alive) return describe("free vertex ", f, " is alive");
+  for (int f : m.free_edges) if (m.edges[f].alive) return describe("free edge ", f, " is alive");
+  for (int f : m.free_tris) if (m.tris[f].alive) return describe("free triangle ", f, " is alive");
+  return {};
+}
+}  // namespace
+
+std::string Mesh::check() const {
+  std::string found = check_triangles(*this);
+  if (found.empty()) found = check_edges(*this);
+  if (found.empty()) found = check_vertices(*this);
+  if (!found.empty()) return found;
   const int chi = live_vertices() - live_mesh_edges() + live_triangles();
-  if (chi != euler) return fail("Euler characteristic ", chi, " differs from the input's ", euler);
+  if (chi != euler) return describe("Euler characteristic ", chi, " differs from the input's ", euler);
   return {};
 }
 
