@@ -15,14 +15,13 @@
 //     (counter-based random stream keyed by edge id), so each iteration simulates the very
 //     same frames; the `mismatch` counter counts iterations whose
 //     splits/restores differ from the dry run (0 expected) and would reveal otherwise.
-//   * One untimed warm-up frame runs on the clone before the timed frames. Measured here: the
-//     first frame after a clone cost 1.4-2x a frame of the continuing simulation (reference
-//     backend, N = 256 and 512, e.g. 220-250 ms against 125-135 ms at N = 512; the fast
-//     backend showed the same before its clones kept reserved room), because a clone's arrays
-//     are allocated to their exact size, so the first splits reallocate (copy, and fault in)
-//     every growing array, which a running simulation amortizes; cold caches and sleeping TBB
-//     workers add to it. From the second frame on, a clone runs at the continuing
-//     simulation's speed, which is what a frame of a crumpling sheet costs.
+//   * One untimed warm-up frame runs on the clone before the timed frames: the first frame
+//     after a clone costs more than a frame of the continuing simulation (a clone's arrays
+//     can be allocated to their exact size, so its first splits reallocate and fault in every
+//     growing array, which a running simulation amortizes; cold caches and sleeping TBB
+//     workers add to it; docs/PERFORMANCE.md, "The benchmarks' prepared state"). From the
+//     second frame on, a clone runs at the continuing simulation's speed, which is what a
+//     frame of a crumpling sheet costs.
 //   * BM_Frame's timed region holds only Sheet::step calls (crumple/crumple.h, the embedding
 //     API), one per frame, which is what an engine's frame loop calls and times: the frame's
 //     steps plus what the API does around them each call (hand over the manipulators, pack the
@@ -68,18 +67,16 @@
 namespace crumple::bench {
 namespace {
 
-/// Where the timed frames start: this fraction of params.sphere_time (1.2 s with the defaults,
-/// frame 72), well into the crumple: with the defaults of commit 95e4564 (phi 0.75, floor 0.5)
-/// every N from 32 to 1024 splits and restores edges every frame there (e.g. N = 256: ~2500
-/// splits and ~1200 restores per frame; N = 32: ~40 and ~12) and stays stable through 1.4 s.
-/// (With the earlier defaults, phi 0.5 and floor 0.25, N >= 128 went unstable before 1.2 s;
-/// an unstable prepared state skips the benchmark with the reason instead of timing it.)
+/// Where the timed frames start: this fraction of params.sphere_time (1.2 s with the paper's
+/// parameters, frame 72), well into the crumple, where every N from 32 to 1024 splits and
+/// restores edges every frame and stays stable past the timed frames (docs/PERFORMANCE.md,
+/// "The benchmarks' prepared state"). An unstable prepared state skips the benchmark with the
+/// reason instead of timing it.
 constexpr double kPrepFraction = 0.6;
 
-/// Largest N at which the reference backend is benchmarked: a frame must cost under ~2 s. At the
-/// prepared point a reference frame cost ~0.4 s at N = 512 and 2.0-2.2 s at N = 1024 (frames
-/// 70-74, `crumple run --grid 1024`, on the 2-core test machine while it was busy), and its
-/// preparation alone takes ~1.5 min, so N = 1024 is left to the fast backend.
+/// Largest N at which the reference backend is benchmarked: a frame must cost under ~2 s, and a
+/// reference frame at N = 1024 costs about that, after minutes of preparation, so N = 1024 is
+/// left to the fast backend (docs/PERFORMANCE.md, "The benchmarks' prepared state").
 constexpr int kReferenceMaxN = 512;
 
 /// Largest N of BM_Default: its frames take tens of steps (docs/DECISIONS.md D28), so a frame at
