@@ -39,6 +39,10 @@ inline constexpr std::array<int, 6> kSizes{32, 64, 128, 256, 512, 1024};
 /// BM_Events).
 inline constexpr std::array<int, 3> kPricedSizes{128, 256, 512};
 
+/// Sheet sizes of BM_Pair (two threads against one, frame by frame): issue 13's target 4 is
+/// about N >= 256.
+inline constexpr std::array<int, 3> kPairedSizes{256, 512, 1024};
+
 /// BM_<kind>/<backend label>/<threads>/<n>.
 inline std::string bench_name(const std::string& kind, const std::string& backend, int threads, int n) {
   return "BM_" + kind + "/" + bench_label(backend) + "/" + std::to_string(threads) + "/" + std::to_string(n);

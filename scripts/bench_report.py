@@ -35,6 +35,7 @@ STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
 DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+PAIR = re.compile(r"^BM_Pair/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 TO_MS = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}
 BUDGETS = [(60, 1000.0 / 60), (30, 1000.0 / 30)]
@@ -446,6 +447,43 @@ def events_section(benches):
     return lines
 
 
+def pair_rows(benches):
+    """(backend, N, 1-thread ms, 2-thread ms, speed-up, lowest, highest, repetitions) per BM_Pair
+    benchmark. The speed-up is the median over repetitions of each repetition's own ratio (its
+    pairs' summed 1-thread time over their summed 2-thread time: both halves of a pair ran on
+    the machine in the same state), not the ratio of the two sides' medians."""
+    rows = []
+    for name, b in benches.items():
+        m = PAIR.match(name)
+        if not m or not b.times:
+            continue
+        ratios = [v for v in b.counters.get("speedup", []) if isinstance(v, (int, float)) and math.isfinite(v) and v > 0]
+        if ratios:
+            rows.append((m["backend"], int(m["n"]), b.counter("ms_1t"), b.counter("ms_2t"), statistics.median(ratios),
+                         min(ratios), max(ratios), len(ratios)))
+    return sorted(rows)
+
+
+def pair_section(benches):
+    rows = pair_rows(benches)
+    if not rows:
+        return []
+    lines = ["## Two threads against one, in pairs", "",
+             "`BM_Pair/<backend>/2/<N>` runs `BM_Frame`'s frames on 1 thread and on 2 back to back in every "
+             "iteration (which side goes first alternates), so that the two halves of a pair meet the same "
+             "neighbours on a shared machine; each repetition's speed-up is its pairs' summed 1-thread time over "
+             "their summed 2-thread time, and the table gives the median over repetitions with the lowest and "
+             "highest (the speed-up table above divides medians of separately interleaved benchmarks instead). "
+             "Times: medians of each side's mean frame.", "",
+             "| configuration | N | 1 thread ms | 2 threads ms | speed-up (median) | lowest | highest | reps |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for backend, n, ms1, ms2, med, lo, hi, reps in rows:
+        lines.append(f"| {backend} 2t against 1t | {n} | {fmt_ms(ms1)} | {fmt_ms(ms2)} | {med:.2f}x | {lo:.2f}x | "
+                     f"{hi:.2f}x | {reps} |")
+    lines.append("")
+    return lines
+
+
 def largest_within(series_for_config, budget_ms):
     fits = [(n, b) for n, b in series_for_config.items() if b.median() <= budget_ms]
     if not fits:
@@ -605,6 +643,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     else:
         lines.append("Only one crumple configuration was measured; no speed-up to show.")
     lines.append("")
+    lines += pair_section(benches)
     lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
     lines += events_section(benches)
     lines += default_section(frame_series(benches, DEFAULT), series)

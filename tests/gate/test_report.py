@@ -1,6 +1,6 @@
 """scripts/bench_report.py's rooflines on synthetic benchmarks: the STREAM roof leaves out the
 random-line kernel (BM_Stream/gather), and an event's floor is its modelled bytes at that
-kernel's rate on the event's thread count. Wrong code this catches: the gather kernel taken as
+kernel's rate on the event's thread count; and BM_Pair's speed-up (class Pairs). Wrong code this catches: the gather kernel taken as
 the roof (it is the lowest, so every pass would look closer to memory-bound), the floor computed
 from the streaming rate or from the other thread count's line rate, bytes read as lines."""
 import os
@@ -52,6 +52,24 @@ class Rooflines(unittest.TestCase):
         b = {k: v for k, v in benches().items() if "gather" not in k}
         rows = [line for line in bench_report.events_section(b) if line.startswith("| fast")]
         self.assertTrue(all(r.endswith("| - | - | - |") for r in rows), rows)
+
+
+class Pairs(unittest.TestCase):
+    """BM_Pair's speed-up is the median of each repetition's own ratio. Wrong code this catches:
+    the ratio of the two sides' medians (here 95 / 50 = 1.90 against the repetitions' 1.70),
+    the ratio inverted, a row for a benchmark without the counter."""
+
+    def test_speedup_is_the_median_of_the_repetitions_ratios(self):
+        name = "BM_Pair/fast/2/512/manual_time"
+        b = bench_report.Bench(name)
+        b.times = [50.0, 60.0, 45.0]
+        b.counters = {"ms_1t": [100.0, 80.0, 95.0], "ms_2t": [50.0, 60.0, 45.0], "speedup": [1.5, 1.9, 1.7]}
+        empty = bench_report.Bench("BM_Pair/fast/2/256/manual_time")
+        empty.times = [10.0]
+        rows = bench_report.pair_rows({name: b, empty.name: empty})
+        self.assertEqual(rows, [("fast", 512, 95.0, 50.0, 1.7, 1.5, 1.9, 3)])
+        table = [line for line in bench_report.pair_section({name: b}) if line.startswith("| fast")]
+        self.assertEqual(table, ["| fast 2t against 1t | 512 | 95 | 50 | 1.70x | 1.50x | 1.90x | 3 |"])
 
 
 if __name__ == "__main__":
