@@ -34,6 +34,9 @@ done
 
 # shellcheck source=scripts/bench_build.sh
 source "$root/scripts/bench_build.sh"
+# The load average before this script's own build: Google Benchmark's "load average at start"
+# is read after the two builds, whose compilers still weigh in the 1-minute average.
+read -r load1 load5 load15 _ < /proc/loadavg
 bench_setup
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
 build_bench "$build" crumple_bench
@@ -96,15 +99,16 @@ elapsed=$(($(date +%s) - start))
 
 "$py" "$root/scripts/machine_info.py" --json > "$dest/machine.json"
 "$py" - "$dest/run.json" "$dest/machine.json" "$elapsed" "$quick" "$reps" "$min_time" "$filter" \
-      "$rev" "${main_cmd[*]}" <<'PY'
+      "$rev" "${main_cmd[*]}" "$load1 $load5 $load15" <<'PY'
 import json, sys, datetime
-out, machine, elapsed, quick, reps, min_time, flt, rev, cmd = sys.argv[1:]
+out, machine, elapsed, quick, reps, min_time, flt, rev, cmd, load = sys.argv[1:]
 with open(machine) as f:
     m = json.load(f)
 json.dump({"machine": m, "mode": "quick" if quick == "1" else "full",
            "command": "scripts/bench.sh" + (" --quick" if quick == "1" else ""),
            "benchmark_command": cmd, "repetitions": int(reps), "min_time": float(min_time),
            "filter": flt, "random_interleaving": True, "git": rev, "seconds": int(elapsed),
+           "load_before_build": [float(x) for x in load.split()],
            "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds")},
           open(out, "w"), indent=2)
 PY

@@ -533,6 +533,45 @@ def event_cost_section(series, frozen):
     return lines
 
 
+def machine_section(run, context):
+    """The report's machine section: CPU, SIMD, compiler, load, caveats."""
+    m = run.get("machine", {})
+    model = m.get("model", "unknown CPU")
+    lines = []
+    lines.append("## Machine")
+    lines.append("")
+    hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
+    lines.append(f"- CPU: {model}{hv}; {m.get('cpus', context.get('num_cpus', '?'))} CPUs "
+                 f"({m.get('cores_per_socket', '?')} cores per socket, {m.get('threads_per_core', '?')} thread(s) per core); "
+                 f"L2 {m.get('l2', '?')}, L3 {m.get('l3', '?')}; {context.get('mhz_per_cpu', '?')} MHz")
+    lines.append(f"- SIMD: **{m.get('simd', '?')}** (flags: {', '.join(m.get('flags', [])) or '?'})")
+    lines.append(f"- Compiler: {m.get('compiler', '?')} (binary: {context.get('crumple_compiler', '?')}); "
+                 f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")
+    lines.append(f"- Backends built: {context.get('crumple_backends', '?')}; kernel {m.get('kernel', '?')}; "
+                 f"load average at start {', '.join(f'{x:.2f}' for x in context.get('load_avg', [])) or '?'}")
+    # The load at the benchmark's start includes bench.sh's own build just before it; the
+    # load before that build (run.json, since 2026-11-28) is the one that tells of neighbours.
+    before = run.get("load_before_build", [])
+    load = before or context.get("load_avg", [])
+    cpus = context.get("num_cpus") or m.get("cpus") or 1
+    if before:
+        lines.append(f"- Load average before bench.sh built the harness {', '.join(f'{x:.2f}' for x in before)} "
+                     "(the one at start above includes that build)")
+    if load and load[0] > 0.5 * cpus:
+        when = "before the run's build" if before else "when the run started"
+        lines.append(f"- **The machine was busy**: load average {load[0]:.2f} on {cpus} CPUs {when}, "
+                     "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
+    if run.get("mode") == "quick":
+        lines.append("- **Quick mode** (`--quick`): N <= 256 and few, short repetitions; a smoke test of the harness, "
+                     "not numbers to publish")
+    if context.get("library_build_type") == "debug":
+        lines.append("- Google Benchmark library: Debian's libbenchmark 1.7.1 reports itself as a debug build; "
+                     "that concerns the harness's own bookkeeping, not the measured code, which is timed by "
+                     "`steady_clock` around the frames (manual time)")
+    lines.append("")
+    return lines
+
+
 def report(json_path, run, context, benches, out_dir, charts):
     series = frame_series(benches)
     m = run.get("machine", {})
@@ -545,30 +584,7 @@ def report(json_path, run, context, benches, out_dir, charts):
                  f"({run.get('mode', '?')} mode, {run.get('date', context.get('date', '?'))}, "
                  f"git `{run.get('git', '?')}`).")
     lines.append("")
-    lines.append("## Machine")
-    lines.append("")
-    hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
-    lines.append(f"- CPU: {model}{hv}; {m.get('cpus', context.get('num_cpus', '?'))} CPUs "
-                 f"({m.get('cores_per_socket', '?')} cores per socket, {m.get('threads_per_core', '?')} thread(s) per core); "
-                 f"L2 {m.get('l2', '?')}, L3 {m.get('l3', '?')}; {context.get('mhz_per_cpu', '?')} MHz")
-    lines.append(f"- SIMD: **{m.get('simd', '?')}** (flags: {', '.join(m.get('flags', [])) or '?'})")
-    lines.append(f"- Compiler: {m.get('compiler', '?')} (binary: {context.get('crumple_compiler', '?')}); "
-                 f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")
-    lines.append(f"- Backends built: {context.get('crumple_backends', '?')}; kernel {m.get('kernel', '?')}; "
-                 f"load average at start {', '.join(f'{x:.2f}' for x in context.get('load_avg', [])) or '?'}")
-    load = context.get("load_avg", [])
-    cpus = context.get("num_cpus") or m.get("cpus") or 1
-    if load and load[0] > 0.5 * cpus:
-        lines.append(f"- **The machine was busy**: load average {load[0]:.2f} on {cpus} CPUs when the run started, "
-                     "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
-    if run.get("mode") == "quick":
-        lines.append("- **Quick mode** (`--quick`): N <= 256 and few, short repetitions; a smoke test of the harness, "
-                     "not numbers to publish")
-    if context.get("library_build_type") == "debug":
-        lines.append("- Google Benchmark library: Debian's libbenchmark 1.7.1 reports itself as a debug build; "
-                     "that concerns the harness's own bookkeeping, not the measured code, which is timed by "
-                     "`steady_clock` around the frames (manual time)")
-    lines.append("")
+    lines += machine_section(run, context)
     lines.append("## How it was run")
     lines.append("")
     lines.append(f"- `{run.get('command', 'scripts/bench.sh')}`, which ran:")

@@ -1,6 +1,6 @@
 """scripts/bench_report.py's rooflines on synthetic benchmarks: the STREAM roof leaves out the
 random-line kernel (BM_Stream/gather), and an event's floor is its modelled bytes at that
-kernel's rate on the event's thread count; and BM_Pair's speed-up (class Pairs). Wrong code this catches: the gather kernel taken as
+kernel's rate on the event's thread count; BM_Pair's speed-up (class Pairs); the busy-machine verdict (class MachineLoad). Wrong code this catches: the gather kernel taken as
 the roof (it is the lowest, so every pass would look closer to memory-bound), the floor computed
 from the streaming rate or from the other thread count's line rate, bytes read as lines."""
 import os
@@ -52,6 +52,28 @@ class Rooflines(unittest.TestCase):
         b = {k: v for k, v in benches().items() if "gather" not in k}
         rows = [line for line in bench_report.events_section(b) if line.startswith("| fast")]
         self.assertTrue(all(r.endswith("| - | - | - |") for r in rows), rows)
+
+
+class MachineLoad(unittest.TestCase):
+    """The busy verdict reads the load before bench.sh's own build when run.json has it. Wrong
+    code this catches: the verdict taken from the load at the benchmark's start (which the build
+    just before inflates) although the earlier reading exists; a busy machine not flagged."""
+
+    context = {"num_cpus": 2, "load_avg": [1.68, 0.67, 0.25]}
+
+    def busy(self, run):
+        return [line for line in bench_report.machine_section(run, self.context) if "was busy" in line]
+
+    def test_a_build_before_the_run_does_not_make_it_busy(self):
+        self.assertEqual(self.busy({"load_before_build": [0.07, 0.02, 0.0]}), [])
+
+    def test_neighbours_before_the_build_make_it_busy(self):
+        busy = self.busy({"load_before_build": [1.9, 1.5, 1.2]})
+        self.assertEqual(len(busy), 1)
+        self.assertIn("1.90 on 2 CPUs before the run's build", busy[0])
+
+    def test_without_the_earlier_reading_the_start_load_decides(self):
+        self.assertEqual(len(self.busy({})), 1)
 
 
 class Pairs(unittest.TestCase):
