@@ -572,21 +572,9 @@ def machine_section(run, context):
     return lines
 
 
-def report(json_path, run, context, benches, out_dir, charts):
-    series = frame_series(benches)
-    m = run.get("machine", {})
-    model = m.get("model", "unknown CPU")
-    lines = []
-    title_tag = m.get("tag", os.path.basename(os.path.abspath(out_dir)))
-    lines.append(f"# crumple benchmark: {model} ({title_tag})")
-    lines.append("")
-    lines.append(f"Written by `scripts/bench_report.py` from `{os.path.basename(json_path)}` "
-                 f"({run.get('mode', '?')} mode, {run.get('date', context.get('date', '?'))}, "
-                 f"git `{run.get('git', '?')}`).")
-    lines.append("")
-    lines += machine_section(run, context)
-    lines.append("## How it was run")
-    lines.append("")
+def how_run_section(run, context):
+    """What ran: the command, repetitions, and what BM_Frame and Bullet's frame time."""
+    lines = ["## How it was run", ""]
     lines.append(f"- `{run.get('command', 'scripts/bench.sh')}`, which ran:")
     lines.append(f"  `{run.get('benchmark_command', '?')}`")
     lines.append(f"- {run.get('repetitions', '?')} repetitions per benchmark, randomly interleaved across benchmarks, "
@@ -609,8 +597,12 @@ def report(json_path, run, context, benches, out_dir, charts):
                  "**A different method**: position-based constraint projection, fixed topology, no fracture, no sphere; "
                  "it shows what a common soft-body library costs per frame at the same size, not the same physics.")
     lines.append("")
-    lines.append("## Frame time")
-    lines.append("")
+    return lines
+
+
+def frame_time_section(series, charts):
+    """Every frame benchmark's median, spread, sizes and events."""
+    lines = ["## Frame time", ""]
     if "frame_time.png" in charts:
         lines.append("![frame time against vertex count](frame_time.png)")
         lines.append("")
@@ -624,8 +616,12 @@ def report(json_path, run, context, benches, out_dir, charts):
             lines.append(f"| `{key[0]}/{key[1]}/{n}` | {n} | {fmt_ms(med)} | {b.cv():.1f} | {len(b.times)} | "
                          f"{v:,.0f} | {e:,.0f} | {sp:.1f} | {rs:.1f} | {1000.0 / med:,.1f} |")
     lines.append("")
-    lines.append("## Largest sheet within the frame budget")
-    lines.append("")
+    return lines
+
+
+def budget_section(series, context):
+    """The largest N of each configuration within 60 and 30 fps."""
+    lines = ["## Largest sheet within the frame budget", ""]
     lines.append("Largest measured N whose median frame time fits the budget (a real-time loop also needs time to draw).")
     lines.append("")
     lines.append("| configuration | 60 fps (<= 16.7 ms) | 30 fps (<= 33.3 ms) |")
@@ -643,9 +639,13 @@ def report(json_path, run, context, benches, out_dir, charts):
                 cells.append(f"N={n}{more}: {b.counter('vertices'):,.0f} vertices, {fmt_ms(b.median())} ms")
         lines.append(f"| {config_label(key[0], key[1], context)} | {cells[0]} | {cells[1]} |")
     lines.append("")
+    return lines
+
+
+def speedup_section(series, charts):
+    """Each step of the chain reference -> no SIMD -> SIMD -> two threads, per N."""
     chain, steps, sizes, table = speedup_steps(series)
-    lines.append("## Speed-up")
-    lines.append("")
+    lines = ["## Speed-up", ""]
     if table:
         if "speedup.png" in charts:
             lines.append("![speed-up per step](speedup.png)")
@@ -659,16 +659,12 @@ def report(json_path, run, context, benches, out_dir, charts):
     else:
         lines.append("Only one crumple configuration was measured; no speed-up to show.")
     lines.append("")
-    lines += pair_section(benches)
-    lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
-    lines += events_section(benches)
-    lines += default_section(frame_series(benches, DEFAULT), series)
-    lines += roofline_section(benches, charts)
-    if "passes.png" in charts:
-        lines.append("## Time per pass")
-        lines.append("")
-        lines.append("![per-pass breakdown](passes.png)")
-        lines.append("")
+    return lines
+
+
+def problems_section(benches):
+    """Benchmarks whose iterations did different work, and benchmarks that reported an error."""
+    lines = []
     uneven = [name for name, b in benches.items() if FRAME.match(name) and b.counter("mismatch") > 0]
     if uneven:
         lines.append("## Iterations that did different work")
@@ -686,6 +682,31 @@ def report(json_path, run, context, benches, out_dir, charts):
         for name, errs in sorted(errors.items()):
             lines.append(f"- `{name}`: {errs[0]} ({len(errs)} of {len(errs) + len(benches[name].times)} repetitions)")
         lines.append("")
+    return lines
+
+
+def report(json_path, run, context, benches, out_dir, charts):
+    series = frame_series(benches)
+    m = run.get("machine", {})
+    title_tag = m.get("tag", os.path.basename(os.path.abspath(out_dir)))
+    lines = [f"# crumple benchmark: {m.get('model', 'unknown CPU')} ({title_tag})", ""]
+    lines.append(f"Written by `scripts/bench_report.py` from `{os.path.basename(json_path)}` "
+                 f"({run.get('mode', '?')} mode, {run.get('date', context.get('date', '?'))}, "
+                 f"git `{run.get('git', '?')}`).")
+    lines.append("")
+    lines += machine_section(run, context)
+    lines += how_run_section(run, context)
+    lines += frame_time_section(series, charts)
+    lines += budget_section(series, context)
+    lines += speedup_section(series, charts)
+    lines += pair_section(benches)
+    lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
+    lines += events_section(benches)
+    lines += default_section(frame_series(benches, DEFAULT), series)
+    lines += roofline_section(benches, charts)
+    if "passes.png" in charts:
+        lines += ["## Time per pass", "", "![per-pass breakdown](passes.png)", ""]
+    lines += problems_section(benches)
     return "\n".join(lines)
 
 
