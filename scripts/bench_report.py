@@ -642,6 +642,46 @@ def budget_section(series, context):
     return lines
 
 
+LINEAR_BASE = 128  # the N whose cost per vertex the others are set against (issue 13's target 3)
+
+
+def per_vertex_rows(series):
+    """[(config, [(n, ns per vertex, ratio to N = LINEAR_BASE or None)])] for every configuration
+    with a vertex count: the median frame over the median live vertices."""
+    rows = []
+    for key in order_configs(series):
+        cells = []
+        for n, b in sorted(series[key].items()):
+            v = b.counter("vertices")
+            if v > 0:
+                cells.append((n, b.median() * 1e6 / v))
+        base = dict(cells).get(LINEAR_BASE)
+        rows.append((key, [(n, ns, ns / base if base else None) for n, ns in cells]))
+    return [(k, c) for k, c in rows if c]
+
+
+def per_vertex_section(series, context):
+    """Cost per vertex against N: constant if a frame's cost were linear in the sheet's size."""
+    rows = per_vertex_rows(series)
+    if not rows:
+        return []
+    sizes = sorted({n for _, cells in rows for n, _, _ in cells})
+    lines = ["## Cost per vertex", ""]
+    lines.append(f"Median frame time over the frame's live vertices, in ns, and in brackets against N = {LINEAR_BASE} "
+                 "of the same configuration: a cost linear in the sheet's size keeps the bracket at 1; a larger sheet's "
+                 "working set leaves the caches.")
+    lines.append("")
+    lines.append("| configuration | " + " | ".join(f"N={n}" for n in sizes) + " |")
+    lines.append("|---|" + "---:|" * len(sizes))
+    for key, cells in rows:
+        by_n = {n: (ns, ratio) for n, ns, ratio in cells}
+        lines.append(f"| {config_label(key[0], key[1], context)} | " + " | ".join(
+            "-" if n not in by_n else f"{by_n[n][0]:,.0f}" + (f" ({by_n[n][1]:.2f}x)" if by_n[n][1] else "")
+            for n in sizes) + " |")
+    lines.append("")
+    return lines
+
+
 def speedup_section(series, charts):
     """Each step of the chain reference -> no SIMD -> SIMD -> two threads, per N."""
     chain, steps, sizes, table = speedup_steps(series)
@@ -698,6 +738,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     lines += how_run_section(run, context)
     lines += frame_time_section(series, charts)
     lines += budget_section(series, context)
+    lines += per_vertex_section(series, context)
     lines += speedup_section(series, charts)
     lines += pair_section(benches)
     lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))

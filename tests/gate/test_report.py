@@ -1,6 +1,6 @@
 """scripts/bench_report.py's rooflines on synthetic benchmarks: the STREAM roof leaves out the
 random-line kernel (BM_Stream/gather), and an event's floor is its modelled bytes at that
-kernel's rate on the event's thread count; BM_Pair's speed-up (class Pairs); the busy-machine verdict (class MachineLoad). Wrong code this catches: the gather kernel taken as
+kernel's rate on the event's thread count; BM_Pair's speed-up (class Pairs); the busy-machine verdict (class MachineLoad); the cost per vertex against N = 128 (class PerVertex). Wrong code this catches: the gather kernel taken as
 the roof (it is the lowest, so every pass would look closer to memory-bound), the floor computed
 from the streaming rate or from the other thread count's line rate, bytes read as lines."""
 import os
@@ -74,6 +74,32 @@ class MachineLoad(unittest.TestCase):
 
     def test_without_the_earlier_reading_the_start_load_decides(self):
         self.assertEqual(len(self.busy({})), 1)
+
+
+class PerVertex(unittest.TestCase):
+    """Cost per vertex is the median frame over the median live vertices, set against N = 128 of
+    the same configuration. Wrong code this catches: the ratio against the smallest N measured
+    (here 64) or against another configuration's N = 128, ms left unconverted, a ratio printed
+    where the configuration has no N = 128."""
+
+    def frames(self, threads, times):
+        out = {}
+        for n, (ms, vertices) in times.items():
+            name = f"BM_Frame/fast/{threads}/{n}/manual_time"
+            b = bench_report.Bench(name)
+            b.times = [ms, ms * 1.5, ms * 0.5]
+            b.counters = {"vertices": [vertices] * 3}
+            out[name] = b
+        return out
+
+    def test_ratio_is_against_n128_of_the_same_configuration(self):
+        benches = self.frames(1, {64: (1.0, 8000), 128: (4.0, 20000), 512: (60.0, 200000)})
+        benches.update(self.frames(2, {256: (10.0, 100000)}))
+        rows = dict(bench_report.per_vertex_rows(bench_report.frame_series(benches)))
+        self.assertEqual(rows[("fast", 1)], [(64, 125.0, 0.625), (128, 200.0, 1.0), (512, 300.0, 1.5)])
+        self.assertEqual(rows[("fast", 2)], [(256, 100.0, None)])
+        lines = bench_report.per_vertex_section(bench_report.frame_series(benches), {})
+        self.assertIn("| fast, 2 threads | - | - | 100 | - |", lines)
 
 
 class Pairs(unittest.TestCase):
