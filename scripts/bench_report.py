@@ -533,6 +533,11 @@ def event_cost_section(series, frozen):
     return lines
 
 
+def fmt_load(values):
+    """A load-average triple as the report prints it ('?' when unknown)."""
+    return ", ".join(f"{x:.2f}" for x in values) or "?"
+
+
 def machine_section(run, context):
     """The report's machine section: CPU, SIMD, compiler, load, caveats."""
     m = run.get("machine", {})
@@ -548,14 +553,14 @@ def machine_section(run, context):
     lines.append(f"- Compiler: {m.get('compiler', '?')} (binary: {context.get('crumple_compiler', '?')}); "
                  f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")
     lines.append(f"- Backends built: {context.get('crumple_backends', '?')}; kernel {m.get('kernel', '?')}; "
-                 f"load average at start {', '.join(f'{x:.2f}' for x in context.get('load_avg', [])) or '?'}")
+                 f"load average at start {fmt_load(context.get('load_avg', []))}")
     # The load at the benchmark's start includes bench.sh's own build just before it; the
-    # load before that build (run.json, since 2026-11-28) is the one that tells of neighbours.
+    # load before that build (run.json's load_before_build) is the one that tells of neighbours.
     before = run.get("load_before_build", [])
     load = before or context.get("load_avg", [])
     cpus = context.get("num_cpus") or m.get("cpus") or 1
     if before:
-        lines.append(f"- Load average before bench.sh built the harness {', '.join(f'{x:.2f}' for x in before)} "
+        lines.append(f"- Load average before bench.sh built the harness {fmt_load(before)} "
                      "(the one at start above includes that build)")
     if load and load[0] > 0.5 * cpus:
         when = "before the run's build" if before else "when the run started"

@@ -1,8 +1,10 @@
-"""scripts/bench_report.py's rooflines on synthetic benchmarks: the STREAM roof leaves out the
-random-line kernel (BM_Stream/gather), and an event's floor is its modelled bytes at that
-kernel's rate on the event's thread count; BM_Pair's speed-up (class Pairs); the busy-machine verdict (class MachineLoad); the cost per vertex against N = 128 (class PerVertex). Wrong code this catches: the gather kernel taken as
-the roof (it is the lowest, so every pass would look closer to memory-bound), the floor computed
-from the streaming rate or from the other thread count's line rate, bytes read as lines."""
+"""scripts/bench_report.py on synthetic benchmarks: the rooflines (class Rooflines: the STREAM
+roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor is its modelled
+bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
+busy-machine verdict (class MachineLoad) and the cost per vertex against N = 128 (class
+PerVertex). Wrong code the rooflines catch: the gather kernel taken as the roof (it is the
+lowest, so every pass would look closer to memory-bound), the floor computed from the streaming
+rate or from the other thread count's line rate, bytes read as lines; each class names its own."""
 import os
 import sys
 import unittest
