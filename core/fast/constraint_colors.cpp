@@ -34,7 +34,7 @@ void ConstraintColors::update(const Topology& m) {
   for (int c = 0; c < ncolors; ++c) start_[std::size_t(c) + 1] += start_[std::size_t(c)];
   order_.resize(std::size_t(start_.back()));
   std::vector<int> next(start_.begin(), start_.end() - 1);
-  for (int e = 0; e < int(color_.size()); ++e)
+  for (int e = 0; e < ne; ++e)
     if (color_[std::size_t(e)] >= 0) order_[std::size_t(next[std::size_t(color_[std::size_t(e)])]++)] = e;
   stale_ = false;
 }

@@ -215,18 +215,35 @@ SplitPlan FastSimulator::plan_split(const SplitCandidate& c) {
   p.e = c.e;
   p.flat_draw = c.flat_draw;
   p.ends = c.ends;
-  // The order in which a split allocates (the id policy of sim/simulator.h), every element near
-  // the split edge's first endpoint (Slack: n lies between i and j [Eq 7], and every new edge and
-  // triangle has n as an end or corner).
-  const int near = c.ends[0];
-  p.n = m.take_vertex(near);
-  p.edges[0] = m.take_edge(near);
-  p.edges[1] = m.take_edge(near);
-  if (c.ends[2] >= 0) p.edges[2] = m.take_edge(near);
-  if (c.ends[3] >= 0) p.edges[3] = m.take_edge(near);
-  if (c.tris[0] >= 0) p.tris[0] = m.take_triangle(near);
-  if (c.tris[1] >= 0) p.tris[1] = m.take_triangle(near);
+  // The order in which a split allocates (the id policy of sim/simulator.h).
+  p.n = m.take_vertex();
+  p.edges[0] = m.take_edge();
+  p.edges[1] = m.take_edge();
+  if (c.ends[2] >= 0) p.edges[2] = m.take_edge();
+  if (c.ends[3] >= 0) p.edges[3] = m.take_edge();
+  if (c.tris[0] >= 0) p.tris[0] = m.take_triangle();
+  if (c.tris[1] >= 0) p.tris[1] = m.take_triangle();
   p.record = m.take_record();
+  return p;
+}
+
+SplitPlan FastSimulator::plan_split_at(const SplitCandidate& c, int split, int edge_at, int tri_at) const {
+  const Topology& m = topo_;
+  SplitPlan p;
+  if (c.e < 0) return p;
+  p.e = c.e;
+  p.flat_draw = c.flat_draw;
+  p.ends = c.ends;
+  // plan_split's takes, in its order. Written out again rather than shared, so that the serial
+  // oracle (split_edge -> plan_split -> take_X) stays an independent check of these positions.
+  p.n = m.peek_vertex(split);
+  p.edges[0] = m.peek_edge(edge_at++);
+  p.edges[1] = m.peek_edge(edge_at++);
+  if (c.ends[2] >= 0) p.edges[2] = m.peek_edge(edge_at++);
+  if (c.ends[3] >= 0) p.edges[3] = m.peek_edge(edge_at);
+  if (c.tris[0] >= 0) p.tris[0] = m.peek_triangle(tri_at++);
+  if (c.tris[1] >= 0) p.tris[1] = m.peek_triangle(tri_at);
+  p.record = m.peek_record(split);
   return p;
 }
 

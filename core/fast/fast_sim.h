@@ -156,6 +156,10 @@ class FastSimulator final : public Simulator {
   // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;
   SplitPlan plan_split(const SplitCandidate& c);  ///< takes the new ids (serial, in event order)
+  /// The same for the split-th split of a batch whose new ids are taken at once (split_rounds.h):
+  /// its vertex and record are the batch's split-th takes of their kinds, its edges and triangles
+  /// the takes from edge_at and tri_at on (Topology::peek_X). Takes nothing: safe in parallel.
+  SplitPlan plan_split_at(const SplitCandidate& c, int split, int edge_at, int tri_at) const;
   bool apply_split(const SplitPlan& p);
   bool split_edge(int e);                     ///< plan and apply: one split alone
   bool can_restore(int e) const;

@@ -63,14 +63,12 @@ void counting_order(const Parallel& par, LayoutScratch& s, int buckets, std::vec
               [&](int k, int to) { order[to] = k; });
 }
 
-/// of[old] = new from order[new] = old, for the n entries of `of` (each written once: no race);
-/// -1 for an old slot that order does not hold, and no entry for order's free slots (-1).
+/// of[old] = new from order[new] = old (each entry written once: no race).
 template <class From, class To>
-void inverse(const Parallel& par, const From& order, To& of, std::size_t n) {
-  of.assign(n, -1);
+void inverse(const Parallel& par, const From& order, To& of) {
+  of.resize(order.size());
   par.run(int(order.size()), kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k)
-      if (order[k] >= 0) of[order[k]] = k;
+    for (int k = b; k < e; ++k) of[order[k]] = k;
   });
 }
 
@@ -83,24 +81,22 @@ template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
 template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
 template <> Array<Face>& spare(LayoutScratch& s) { return s.spare_faces; }
 
-/// One array of a permutation group: a[new] = rename(a[order[new]], order[new]), or `none` where
-/// the order has a free slot (-1).
+/// One array of a permutation group: a[new] = rename(a[order[new]], order[new]).
 template <class T, class F>
 struct Gathered {
   using value_type = T;
   Array<T>& a;
   F rename;
-  T none;
   const T* src = nullptr;
   T* dst = nullptr;
 };
 template <class T, class F>
-Gathered<T, F> gathered(Array<T>& a, F rename, T none = T{}) {
-  return {a, rename, none};
+Gathered<T, F> gathered(Array<T>& a, F rename) {
+  return {a, rename};
 }
 template <class T>
-auto gathered(Array<T>& a, T none = T{}) {
-  return gathered(a, [](const T& v, int) { return v; }, none);
+auto gathered(Array<T>& a) {
+  return gathered(a, [](const T& v, int) { return v; });
 }
 
 template <class T, class... U>
@@ -117,11 +113,11 @@ T* ready_spare(Array<T>& out, const Array<T>& from, std::size_t n) {
   return out.data();
 }
 
-/// Readies g to gather n elements into its type's spare buffer.
+/// Readies g to gather into its type's spare buffer.
 template <class G>
-void ready(LayoutScratch& s, G& g, std::size_t n) {
+void ready(LayoutScratch& s, G& g) {
   g.src = g.a.data();
-  g.dst = ready_spare(spare<typename G::value_type>(s), g.a, n);
+  g.dst = ready_spare(spare<typename G::value_type>(s), g.a, g.a.size());
 }
 
 /// Gathers every array of one group in the new order, in one loop over `order` (one read of
@@ -131,20 +127,20 @@ void ready(LayoutScratch& s, G& g, std::size_t n) {
 template <class... G>
 void permute(const Parallel& par, LayoutScratch& s, const std::vector<int>& order, G... g) {
   static_assert(kDistinct<typename G::value_type...>, "one spare buffer per element type");
-  (ready(s, g, order.size()), ...);
+  (ready(s, g), ...);
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     const int* __restrict o = order.data();
     auto copy = [&](int k) {
       const int from = o[k];
-      if (from < 0) ((g.dst[k] = g.none), ...);
-      else ((g.dst[k] = g.rename(g.src[from], from)), ...);
+      ((g.dst[k] = g.rename(g.src[from], from)), ...);
     };
     // The sources are scattered (new elements sit at the end until a relayout): fetch them
     // kAhead on. Not the renaming tables' entries: prefetching those too made it slower
     // (docs/PERFORMANCE.md).
     const int ahead = std::max(b, e - kAhead);
     for (int k = b; k < ahead; ++k) {
-      if (const int next = o[k + kAhead]; next >= 0) (__builtin_prefetch(&g.src[next]), ...);
+      const int next = o[k + kAhead];
+      (__builtin_prefetch(&g.src[next]), ...);
       copy(k);
     }
     for (int k = ahead; k < e; ++k) copy(k);
@@ -189,8 +185,7 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
   parallel.swap(s.spare_i2);
 }
 
-/// Morton order of the vertex slots with ids by rest position, the dead ones last, into s.vorder
-/// (free slots, which have no id, are left out).
+/// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
 void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int n = V.size();
   // The bounds of the live rest positions, per fixed block (min and max: the same on any
@@ -217,8 +212,8 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   s.code.resize(n);
   par.run(n, kGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
-      if (!(V.mass(v) > 0)) {  // after every live vertex; free slots after the dead ones
-        s.code[v] = std::uint64_t(V.lid[v] >= 0 ? 1 : 2) << (3 * bits);
+      if (!(V.mass(v) > 0)) {
+        s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
         continue;
       }
       const Float4 X = V.rest[v];
@@ -231,51 +226,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
       s.code[v] = code;
     }
   });
-  radix_order(par, s, 3 * bits + 2, s.vorder);
-  s.vorder.resize(std::size_t(V.ids()));
-}
-
-/// Spreads `order` (its first `live` entries the live elements in layout order, block blk(k)
-/// for the k-th, non-decreasing in k; then the dead elements with ids) into `blocks` blocks of
-/// the layout: block b's elements followed by nfree(count) free slots (-1), the dead ones after
-/// the last block. Records the blocks and their free slots in `free` (Slack).
-template <class BlockOf, class NFree>
-void spread(const Parallel& par, std::vector<int>& order, int live, int blocks, BlockOf blk, NFree nfree,
-            std::vector<int>& out, FreeSlots& free) {
-  std::vector<int> lo(std::size_t(blocks) + 1, live);
-  for (int b = 0; b < blocks; ++b) {  // the first of block b: a binary search (blk is monotone)
-    int first = 0, last = live;
-    while (first < last) {
-      const int mid = first + (last - first) / 2;
-      if (blk(mid) < b) first = mid + 1;
-      else last = mid;
-    }
-    lo[b] = first;
-  }
-  free.first.resize(std::size_t(blocks) + 1);
-  free.at.resize(std::size_t(blocks) + 1);
-  free.top.resize(std::size_t(blocks));
-  int slot = 0, spare = 0;
-  for (int b = 0; b < blocks; ++b) {
-    const int count = lo[b + 1] - lo[b];
-    free.first[b] = slot, free.at[b] = spare;
-    slot += count + nfree(count);
-    spare += nfree(count);
-  }
-  free.first[blocks] = slot, free.at[blocks] = spare;
-  free.slot.resize(std::size_t(spare));
-  const int dead = int(order.size()) - live;
-  out.resize(std::size_t(slot + dead));
-  par.run(blocks, 64, [&](int b0, int b1) {
-    for (int b = b0; b < b1; ++b) {
-      const int count = lo[b + 1] - lo[b], at = free.first[b];
-      std::copy_n(&order[std::size_t(lo[b])], count, &out[std::size_t(at)]);
-      for (int k = at + count, q = free.at[b]; k < free.first[b + 1]; ++k, ++q) out[std::size_t(k)] = -1, free.slot[std::size_t(q)] = k;
-      free.top[b] = free.at[b + 1];
-    }
-  });
-  std::copy_n(&order[std::size_t(live)], dead, &out[std::size_t(slot)]);
-  order.swap(out);
+  radix_order(par, s, 3 * bits + 1, s.vorder);
 }
 
 }  // namespace
@@ -308,55 +259,34 @@ LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
 
 bool layout_stale(const Topology& m, double fraction) {
   if (fraction < 0) return false;
-  if (m.slack.v.first.empty()) return true;  // the first relayout lays out the free slots
   return double(m.V.created) >= fraction * m.V.size();
 }
 
 namespace {
-/// Orders edges or triangles by s.key (their lower endpoint's, lowest corner's new slot; nv for a
-/// dead one with an id, nv + 1 for a free slot) and spreads them into the vertices' blocks with
-/// one free slot per Slack::kFreeEvery.
-void spread_by_key(const Parallel& par, LayoutScratch& s, int nv, int ids, int blocks, std::vector<int>& order,
-                   FreeSlots& free) {
-  counting_order(par, s, nv + 2, order);
-  order.resize(std::size_t(ids));
-  const int* key = s.key.data();
-  const int live = int(std::partition_point(order.begin(), order.end(), [&](int k) { return key[k] < nv; }) - order.begin());
-  spread(par, order, live, blocks, [&](int k) { return key[order[std::size_t(k)]] / Slack::kBlockSlots; },
-         [](int count) { return (count + Slack::kFreeEvery - 1) / Slack::kFreeEvery; }, s.idx, free);
-}
-
-/// The new slot orders (new slot -> old slot, -1 for a free one) and their inverses (s.vnew[old]
-/// = new): vertices along the Morton curve, then edges by their lower endpoint's new slot and
-/// triangles by their lowest corner's (counting sorts), each spread into the layout's blocks with
-/// free slots (Slack), dead elements with ids last. The old free slots are dropped.
-void slot_orders(Topology& m, const Parallel& par, LayoutScratch& s) {
+/// The new slot orders and their inverses (s.vnew[old] = new): vertices along the Morton curve,
+/// then edges by their lower endpoint's new slot and triangles by their lowest corner's
+/// (counting sorts), dead elements last.
+void slot_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const Vertices& V = m.V;
   const Edges& E = m.E;
   const Triangles& T = m.T;
-  const int ne = E.size(), nt = T.size();
+  const int nv = V.size(), ne = E.size(), nt = T.size();
   vertex_order(par, V, s);
-  const int live = int(std::count_if(V.xm.begin(), V.xm.end(), [](const Float4& x) { return x.w > 0; }));
-  const int blocks = (live + Slack::kBlockLive - 1) / Slack::kBlockLive;
-  spread(par, s.vorder, live, blocks, [](int k) { return k / Slack::kBlockLive; },
-         [](int count) { return Slack::kBlockSlots - count; }, s.idx, m.slack.v);
-  inverse(par, s.vorder, s.vnew, std::size_t(V.size()));
-  const int nv = int(s.vorder.size());
+  inverse(par, s.vorder, s.vnew);
   const std::vector<int>& vnew = s.vnew;
   s.key.resize(ne);
   par.run(ne, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k)
-      s.key[k] = (E[k].flags & kAlive) ? std::min(vnew[E[k].a], vnew[E[k].b]) : E.lid[k] >= 0 ? nv : nv + 1;
+    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(vnew[E[k].a], vnew[E[k].b]) : nv;
   });
-  spread_by_key(par, s, nv, E.ids(), blocks, s.eorder, m.slack.e);
-  inverse(par, s.eorder, s.enew, std::size_t(ne));
+  counting_order(par, s, nv + 1, s.eorder);
+  inverse(par, s.eorder, s.enew);
   s.key.resize(nt);
   par.run(nt, kGrain, [&](int b, int e) {
     for (int t = b; t < e; ++t)
-      s.key[t] = T.alive[t] ? std::min({vnew[T[t].v[0]], vnew[T[t].v[1]], vnew[T[t].v[2]]}) : T.lid[t] >= 0 ? nv : nv + 1;
+      s.key[t] = T.alive[t] ? std::min({vnew[T[t].v[0]], vnew[T[t].v[1]], vnew[T[t].v[2]]}) : nv;
   });
-  spread_by_key(par, s, nv, T.ids(), blocks, s.torder, m.slack.t);
-  inverse(par, s.torder, s.tnew, std::size_t(nt));
+  counting_order(par, s, nv + 1, s.torder);
+  inverse(par, s.torder, s.tnew);
 }
 
 /// Old slot -> new slot of each kind (-1, "none", stays -1).
@@ -372,7 +302,7 @@ struct Renames {
 // Groups of distinct element types (one spare buffer per type).
 void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Renames& to) {
   const std::vector<int>& vorder = s.vorder;
-  permute(par, s, vorder, gathered(V.xm), gathered(V.spring_list), gathered(V.lid, -1));
+  permute(par, s, vorder, gathered(V.xm), gathered(V.spring_list), gathered(V.lid));
   permute(par, s, vorder, gathered(V.vm), gathered(V.tri_list));
   permute(par, s, vorder, gathered(V.nr));
   permute(par, s, vorder, gathered(V.rest));
@@ -393,14 +323,12 @@ void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Renames& 
                      else r.a = r.b = 0;
                      r.wl = to.v(r.wl), r.wr = to.v(r.wr), r.tri0 = to.t(r.tri0), r.tri1 = to.t(r.tri1);
                      return r;
-                   },
-                   kNoEdge),
-          gathered(E.lid, -1));
+                   }),
+          gathered(E.lid));
 }
 
-// Triangles (dead ones keep corners 0 and no edges). The areas are not moved, only sized to the
-// slots: they are per-step values that compute_normals writes for every slot before anything
-// reads them.
+// Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
+// per-step values that compute_normals writes for every slot before anything reads them.
 void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Renames& to) {
   const std::uint8_t* old_alive = T.alive.data();
   permute(par, s, s.torder,
@@ -409,11 +337,8 @@ void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const R
                      const bool alive = old_alive[from];
                      for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(to.vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = to.e(f.e[k]);
                      return f;
-                   },
-                   kNoFace),
-          gathered(T.lid, -1), gathered(T.alive));
-  T.area.resize(T.slots.size());
-  T.area.keep_warm();
+                   }),
+          gathered(T.lid), gathered(T.alive));
 }
 
 // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
@@ -436,9 +361,9 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
   move_triangles(m.T, par, s, to);
   rename_records(m.records, par, to);
   // The inverse maps; free lists hold logical ids and do not change.
-  inverse(par, m.V.lid, m.V.phys, m.V.phys.size());
-  inverse(par, m.E.lid, m.E.phys, m.E.phys.size());
-  inverse(par, m.T.lid, m.T.phys, m.T.phys.size());
+  inverse(par, m.V.lid, m.V.phys);
+  inverse(par, m.E.lid, m.E.phys);
+  inverse(par, m.T.lid, m.T.phys);
   m.V.created = 0;
 }
 

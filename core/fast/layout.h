@@ -48,8 +48,7 @@ struct LayoutScratch {
 /// Reorders the slots of m as described above and resets the vertices' `created` counter.
 void relayout(Topology& m, const Parallel& par, LayoutScratch& scratch);
 
-/// True when there has been no relayout yet, or when the vertices created since the last one
-/// that found no free slot near their hint (Slack) are at least `fraction` of the slots
+/// True when the vertices created since the last relayout are at least `fraction` of the slots
 /// (fraction 0: always; negative: never).
 bool layout_stale(const Topology& m, double fraction);
 

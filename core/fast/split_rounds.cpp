@@ -11,6 +11,7 @@ namespace crumple::fast {
 namespace {
 constexpr int kRoundGrain = 64;       ///< smaller rounds run inline: too few splits to repay a parallel loop's start
 constexpr int kCandidateGrain = 256;  ///< a candidate read misses several lines: smaller chunks repay
+constexpr int kTakeGrain = 512;       ///< a plan's takes miss a line or two (the free ids' slots)
 }  // namespace
 
 void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices); }
@@ -31,8 +32,9 @@ int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, Trian
 
 // The pre-pass: acceptance and rounds serially in event order, then the new ids. What the serial
 // loop needs of each candidate is read in parallel first into a compact array, so that it
-// touches only that array, the stamps and the rounds; it counts the triangles the accepted
-// splits take, for the stamps. Returns the number of rounds.
+// touches only that array, the stamps and the rounds; it counts the ids each accepted split
+// takes, so that the plans can look theirs up in parallel and take them all at once after.
+// Returns the number of rounds.
 int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
   tally_.resize(std::size_t(m.V.size()), Tally{});
@@ -51,7 +53,7 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
 
 // Acceptance (D13) and rounds, serially in event order.
 int SplitRounds::accept(TriangleStamps& stamps) {
-  int rounds = 0, tris = 0;
+  int rounds = 0, edges = 0, tris = 0;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     if (k + kNear < candidates_.size()) {
       const SplitCandidate& f = candidates_[k + kNear];
@@ -80,26 +82,32 @@ int SplitRounds::accept(TriangleStamps& stamps) {
     }
     rounds = std::max(rounds, round);
     for (int t : c.tris) stamps.mark(t);
-    accepted_.push_back(Accepted{int(k)});
-    tris += (c.tris[0] >= 0) + (c.tris[1] >= 0);  // plan_split's takes
+    accepted_.push_back(Accepted{int(k), edges, tris});
+    edges += 2 + (c.ends[2] >= 0) + (c.ends[3] >= 0);  // plan_split's takes
+    tris += (c.tris[0] >= 0) + (c.tris[1] >= 0);
     round_of_.push_back(round);
   }
-  tris_taken_ = tris;
+  edges_taken_ = edges, tris_taken_ = tris;
   return rounds;
 }
 
-// The accepted splits' plans, serially in event order: each takes its new ids and slots
-// (plan_split, which places them near the split: Slack), and marks its new triangles (slots no
-// candidate of the pass had, so the acceptance did not read their stamps).
+// The accepted splits' plans, in parallel: each looks its new ids up at its place in the pass's
+// takes, and marks its new triangles (slots no candidate of the pass had, so the acceptance did
+// not read their stamps); then every id is taken at once.
 void SplitRounds::take_ids(FastSimulator& sim, TriangleStamps& stamps) {
-  const Topology& m = sim.topo_;
+  Topology& m = sim.topo_;
+  const int n = int(accepted_.size());
+  plans_.resize(accepted_.size());
   const int fresh_tris = std::max(0, tris_taken_ - int(m.T.free_ids.size()));  // takes past the free list
   stamps.cover(m.T.lid.size() + std::size_t(fresh_tris));
-  plans_.resize(accepted_.size());
-  for (std::size_t j = 0; j < accepted_.size(); ++j) {
-    plans_[j] = sim.plan_split(candidates_[std::size_t(accepted_[j].candidate)]);
-    for (int t : plans_[j].tris) stamps.mark(t);
-  }
+  sim.par_.run(n, kTakeGrain, [&](int b, int e) {
+    for (int j = b; j < e; ++j) {
+      const Accepted& a = accepted_[j];
+      plans_[j] = sim.plan_split_at(candidates_[a.candidate], j, a.edge_at, a.tri_at);
+      for (int t : plans_[j].tris) stamps.mark(t);
+    }
+  });
+  m.take_batch(n, edges_taken_, tris_taken_, n);
 }
 
 // Room in the adjacency lists for every append the plan counted, so that no block moves while

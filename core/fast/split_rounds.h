@@ -2,8 +2,8 @@
 // D13). Acceptance is decided first, serially in event order: a split is skipped when an
 // earlier accepted split of the pass changed one of its edge's two triangles, and those are
 // still the triangles it had at the start of the pass (a split changes only its own two, and any
-// later split sharing one is skipped). Each accepted split then takes its new ids and slots, in
-// event order (Topology::take_X). Accepted splits then apply in rounds: a split's round
+// later split sharing one is skipped). Counting what each accepted split takes then gives each
+// its new ids, looked up in parallel. Accepted splits then apply in rounds: a split's round
 // is one more than the last round of an earlier split sharing one of its vertices, so the
 // splits of a round have disjoint vertex sets (hence disjoint edges, triangles and adjacency
 // lists) and run in parallel, while every vertex still receives its edits in event order.
@@ -59,12 +59,13 @@ class SplitRounds {
   Array<Tally> tally_;
   // Per pass, kept so that a pass allocates (and faults in) no memory.
   std::vector<SplitCandidate> candidates_;   ///< per split event
-  /// An accepted split: its candidate.
+  /// An accepted split: its candidate, and where its new edges and triangles fall among the
+  /// pass's takes of each kind (its vertex and record are its own index among the accepted).
   struct Accepted {
-    int candidate;
+    int candidate, edge_at, tri_at;
   };
   std::vector<Accepted> accepted_;           ///< in event order
-  int tris_taken_ = 0;                       ///< by all of accepted_
+  int edges_taken_ = 0, tris_taken_ = 0;     ///< by all of accepted_
   std::vector<SplitPlan> plans_;             ///< accepted splits, in event order
   std::vector<int> round_of_;                ///< per plan
   std::vector<int> involved_;                ///< vertices of accepted splits (i, j, l, r), once each

@@ -64,64 +64,62 @@ void Topology::reserve(std::size_t nv, std::size_t ne, std::size_t nt) {
   records.reserve_warm(nv);  // one per split vertex: refinement's new vertices
 }
 
-int FreeSlots::block_of(int s) const {
-  if (first.size() < 2 || s < first.front() || s >= first.back()) return -1;
-  return int(std::upper_bound(first.begin(), first.end(), s) - first.begin()) - 1;
-}
-
-int FreeSlots::pop_near(int b) {
-  for (int d = 0; d <= Slack::kNearBlocks; ++d)
-    for (int c : {b + d, b - d}) {
-      if (c >= 0 && c < blocks() && top[c] > at[c]) return slot[std::size_t(--top[c])];
-      if (d == 0) break;
-    }
-  return -1;
-}
-
-void FreeSlots::push(int s) {
-  const int b = block_of(s);
-  if (b >= 0 && top[b] < at[b + 1]) slot[std::size_t(top[b]++)] = s;
-}
-
-// A slot for a new element. Its logical id is the newest freed one (LIFO, the id policy of
-// sim/simulator.h) or a new one. Its slot: with a hint block, the id's own (a recycled id)
-// if that is near the block, else a free slot near it (Slack), else the recycled id's own or,
-// for a new id, a new slot at the end; a recycled id that moves leaves its old slot free. The
-// slot of a recycled id is a random read (phys[id]), and a pass takes thousands in a row: each
-// take prefetches the phys entry of the id that the take kTakeAhead + 1 from now will pop, so
-// that the pops find it in cache. Returns the slot; counts a take that found no slot near its
-// hint in *far.
+// A slot for a new element: the newest freed logical id and its slot (LIFO, the id policy of
+// sim/simulator.h), or a new id and slot at the end (both ranges always have the same size).
+// The slot of a recycled id is a random read (phys[id]), and a pass takes thousands in a row:
+// each take prefetches the phys entry of the id that the take kTakeAhead + 1 from now will pop,
+// so that the pops find it in cache.
 constexpr std::size_t kTakeAhead = 8;  ///< enough takes between for the miss to resolve, few enough that the line stays cached
 template <class Kind>
-int take_slot(Kind& k, FreeSlots& free, int block, std::int64_t* far) {
-  int id = 0, slot = -1;
+int take_slot(Kind& k) {
+  const std::size_t size = k.lid.size();
   if (!k.free_ids.empty()) {
-    id = k.free_ids.back();
+    const int id = k.free_ids.back();
     k.free_ids.pop_back();
     if (k.free_ids.size() > kTakeAhead) __builtin_prefetch(&k.phys[k.free_ids[k.free_ids.size() - 1 - kTakeAhead]]);
-    slot = k.phys[id];
-  } else {
-    id = int(k.phys.size());
-    k.phys.push_back(-1);
+    return k.phys[id];
   }
-  if (block >= 0) {
-    if (slot >= 0) {
-      const int own = free.block_of(slot);
-      if (own >= 0 && std::abs(own - block) <= Slack::kNearBlocks) return slot;
-    }
-    if (const int placed = free.pop_near(block); placed >= 0) {
-      if (slot >= 0) k.lid[slot] = -1, free.push(slot);
-      k.lid[placed] = id;
-      k.phys[id] = placed;
-      return placed;
-    }
+  k.lid.push_back(std::int32_t(size));
+  k.phys.push_back(std::int32_t(size));
+  return int(size);
+}
+
+// take_slot's batch form (Topology::peek_X, take_batch): the q-th take pops the q-th newest free
+// id, and the takes past the free list make new ids and slots in order.
+template <class Kind>
+int peek_slot(const Kind& k, int q) {
+  const int free = int(k.free_ids.size());
+  return q < free ? k.phys[std::size_t(k.free_ids[std::size_t(free - 1 - q)])] : int(k.lid.size()) + (q - free);
+}
+
+template <class Kind>
+void take_slots(Kind& k, int count) {
+  const int pops = std::min(count, int(k.free_ids.size()));
+  k.free_ids.resize(k.free_ids.size() - std::size_t(pops));
+  for (int q = pops; q < count; ++q) {
+    const auto size = std::int32_t(k.lid.size());
+    k.lid.push_back(size);
+    k.phys.push_back(size);
   }
-  if (far) ++*far;
-  if (slot >= 0) return slot;
-  slot = int(k.lid.size());
-  k.lid.push_back(id);
-  k.phys[id] = slot;
-  return slot;
+}
+
+int Topology::peek_vertex(int q) const { return peek_slot(V, q); }
+int Topology::peek_edge(int q) const { return peek_slot(E, q); }
+int Topology::peek_triangle(int q) const { return peek_slot(T, q); }
+int Topology::peek_record(int q) const {
+  const int free = int(free_records.size());
+  return q < free ? free_records[std::size_t(free - 1 - q)] : int(records.size()) + (q - free);
+}
+
+void Topology::take_batch(int vertices, int edges, int triangles, int records_taken) {
+  V.created += vertices;
+  take_slots(V, vertices);
+  take_slots(E, edges);
+  take_slots(T, triangles);
+  const int pops = std::min(records_taken, int(free_records.size()));
+  free_records.resize(free_records.size() - std::size_t(pops));
+  records.resize(records.size() + std::size_t(records_taken - pops));
+  records.keep_warm();
 }
 
 int Topology::new_vertex() {
@@ -134,9 +132,13 @@ int Topology::new_vertex() {
 // A vertex slot keeps its blocks when it is released and reused: only new slots get blocks (fit).
 void Topology::init_vertex(int v) { V.spring_list[v].count = V.tri_list[v].count = 0; }
 
-int Topology::take_vertex(int near) { return take_slot(V, slack.v, near >= 0 ? slack.v.block_of(near) : -1, &V.created); }
-int Topology::take_edge(int near) { return take_slot(E, slack.e, near >= 0 ? slack.v.block_of(near) : -1, nullptr); }
-int Topology::take_triangle(int near) { return take_slot(T, slack.t, near >= 0 ? slack.v.block_of(near) : -1, nullptr); }
+int Topology::take_vertex() {
+  ++V.created;
+  return take_slot(V);
+}
+int Topology::take_edge() { return take_slot(E); }
+
+int Topology::take_triangle() { return take_slot(T); }
 
 namespace {
 /// Appends a block of `room` entries to a pool and its parallel pool; returns its start.
@@ -194,7 +196,10 @@ void Topology::init_edge(int e, int a, int b, float l0) {
 void Topology::release_edge(int e) {
   unlist_spring(E[e].a, e << 1);
   unlist_spring(E[e].b, (e << 1) | 1);
-  E[e] = kNoEdge;
+  E[e].a = E[e].b = 0;
+  E[e].wl = E[e].wr = E[e].tri0 = E[e].tri1 = E[e].record = -1;
+  E[e].l0 = 1;
+  E[e].flags = 0;
 }
 
 int Topology::new_triangle() {

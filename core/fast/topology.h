@@ -119,8 +119,7 @@ struct Vertices {
   std::int64_t garbage_e = 0;     ///< springs pool entries in blocks a list moved out of
   std::int64_t garbage_t = 0;     ///< the same for the tris pool
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
-  std::int64_t created = 0;       ///< vertices taken since the last relayout into no free slot
-                                  ///< near their hint (Slack): appended, or left far (layout_stale)
+  std::int64_t created = 0;       ///< vertices taken since the last relayout (layout_stale)
 
   int size() const { return int(xm.size()); }  ///< slots (ids and free slots: see Slack)
   int ids() const { return int(phys.size()); }  ///< logical ids, live or on the free list
@@ -144,9 +143,6 @@ struct EdgeRecord {
 };
 // An event prefetches a record's first and last byte (event_prefetch.h): at most two lines.
 static_assert(sizeof(EdgeRecord) <= 64);
-/// A dead edge slot (topology.h's harmless values): joins vertex 0 to itself, no wings, no
-/// triangles, no record.
-constexpr EdgeRecord kNoEdge{0, 0, -1, -1, -1, -1, 1.0f, -1, 0};
 
 struct Edges {
   Array<EdgeRecord> slots;       ///< the record of each slot (a new slot is all zero until init_edge)
@@ -176,40 +172,6 @@ struct Triangles {
   std::array<int, 3> corners(int t) const { return slots[std::size_t(t)].v; }
 };
 
-/// Free slots of one element kind, in a stack per block of the layout (Slack).
-struct FreeSlots {
-  std::vector<std::int32_t> first;  ///< first slot of each block, and one past the last block's end
-  std::vector<std::int32_t> slot;   ///< the stacks: block b's is slot[at[b] .. top[b]), room to at[b + 1]
-  std::vector<std::int32_t> at, top;
-
-  int blocks() const { return int(top.size()); }
-  /// The block that slot s lies in (-1: past the blocks, appended since the last relayout).
-  int block_of(int s) const;
-  /// A free slot in block b or the nearest block within kNearBlocks (-1: none).
-  int pop_near(int b);
-  /// Stacks free slot s in its block, if the block has room for it (else it stays unused until
-  /// the next relayout).
-  void push(int s);
-  void clear() { first.clear(), slot.clear(), at.clear(), top.clear(); }
-};
-
-/// Free slots without an id that relayout leaves in every block of the layout, so that a split's
-/// new vertex, edges and triangles take slots next to their parents' (Topology::take_X with a
-/// hint) rather than at the ends of the arrays, where they would scatter every pass's neighbour
-/// reads until the next relayout (docs/PERFORMANCE.md). A block is kBlockLive live vertices along
-/// the layout's curve followed by kBlockFree free vertex slots, then, in the edge and triangle
-/// arrays, the block's edges (by lower endpoint) and triangles (by lowest corner), each group
-/// followed by one free slot per kFreeEvery of its elements. A free slot holds a dead element
-/// (topology.h's harmless values) and has no logical id (lid -1): every pass computes it as a dead
-/// one.
-struct Slack {
-  static constexpr int kBlockLive = 56, kBlockFree = 8, kBlockSlots = kBlockLive + kBlockFree;
-  static constexpr int kFreeEvery = 7;
-  /// How far (in blocks, either way) a take looks for a free slot near its hint.
-  static constexpr int kNearBlocks = 2;
-  FreeSlots v, e, t;
-};
-
 /// The whole mesh and the serial edits of its topology.
 class Topology {
  public:
@@ -219,7 +181,6 @@ class Topology {
   Array<SplitRecord> records;        ///< split records (ids recycled through free_records)
   std::vector<int> free_records;     ///< LIFO free list of record ids
   int euler = 0;                     ///< V - E + F of the input, kept by splits and restores
-  Slack slack;                       ///< the layout's free slots (empty before the first relayout)
 
   /// Reserves room for this many elements of each kind, so refinement appends without
   /// reallocating (growth past it is geometric, as for any vector).
@@ -228,17 +189,23 @@ class Topology {
   // Element edits take and return slots; the logical id follows the id policy. new_X is
   // take_X (allocates the id and slot: serial, in event order), fit (sizes the arrays to the
   // slots taken: once for a whole batch of takes) then init_X (fills the slot and lists it: may
-  // run in parallel for elements of disjoint vertices). A take near vertex slot `near` puts the
-  // id in a free slot of near's block of the layout, or of one close to it (Slack), moving a
-  // recycled id there from its old slot; without one (or near < 0) a recycled id keeps its slot
-  // and a new one gets a new slot at the end.
+  // run in parallel for elements of disjoint vertices).
   int new_vertex();
   int new_edge(int a, int b, float l0);  ///< a breakable mesh edge, listed at a and b
   int new_triangle();
-  int take_vertex(int near = -1);
-  int take_edge(int near = -1);
-  int take_triangle(int near = -1);
+  int take_vertex();
+  int take_edge();
+  int take_triangle();
   int take_record();  ///< a split record id (LIFO free list, else a new one)
+  // A batch of takes decided in advance (the split plan, split_rounds.h): peek_X(q) is the slot
+  // that the q-th take_X from now would return (q = 0: the next one), without taking it, so the
+  // batch's slots can be looked up in parallel; take_batch then takes that many of each kind,
+  // as that many take_X calls would.
+  int peek_vertex(int q) const;
+  int peek_edge(int q) const;
+  int peek_triangle(int q) const;
+  int peek_record(int q) const;
+  void take_batch(int vertices, int edges, int triangles, int records);
   void fit();         ///< grows every array to the slots taken (new slots value-initialized)
   void init_vertex(int v);
   void init_edge(int e, int a, int b, float l0);

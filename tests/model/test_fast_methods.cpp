@@ -87,7 +87,7 @@ TEST(FastMethods, ConstraintColorsAreGreedyInIdOrder) {
     }
   }
   int live = 0;
-  for (int id = 0; id < m.E.ids(); ++id) {
+  for (int id = 0; id < m.E.size(); ++id) {
     const int e = m.E.phys[id];
     if (!(m.E[e].flags & fast::kAlive)) continue;
     ++live;
