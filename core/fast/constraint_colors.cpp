@@ -7,8 +7,8 @@ namespace crumple::fast {
 void ConstraintColors::update(const Topology& m) {
   if (!stale_) return;
   const Edges& E = m.E;
-  const int ne = E.ids();
-  color_.assign(std::size_t(E.size()), -1);
+  const int ne = E.size();
+  color_.assign(std::size_t(ne), -1);
   std::fill(taken_.begin(), taken_.end(), 0u);
   int ncolors = 0;
   for (int id = 0; id < ne; ++id) {

@@ -214,10 +214,9 @@ StepEvents FastSimulator::adapt() {
 std::vector<Decision> FastSimulator::decide() const {
   FastSimulator tmp(*this);
   tmp.adapt_decide();
-  std::vector<Decision> out(std::size_t(tmp.topo_.E.ids()));
+  std::vector<Decision> out(tmp.decisions_.size());
   const double budget = params_.budget_factor(topo_.live_vertices());
-  for (size_t e = 0; e < tmp.decisions_.size(); ++e) {
-    if (tmp.topo_.E.lid[e] < 0) continue;  // a free slot (Slack): no id
+  for (size_t e = 0; e < out.size(); ++e) {
     out[tmp.topo_.E.lid[e]].kind = tmp.decisions_[e];
     out[tmp.topo_.E.lid[e]].margin = tmp.margin(int(e), budget);
   }
@@ -252,7 +251,7 @@ double FastSimulator::margin(int e, double budget) const {
 }
 
 bool FastSimulator::split(int id) {
-  if (id < 0 || id >= topo_.E.ids()) return false;
+  if (id < 0 || id >= topo_.E.size()) return false;
   compute_normals();
   normals_valid_ = false;
   colors_.invalidate();
@@ -260,7 +259,7 @@ bool FastSimulator::split(int id) {
 }
 
 bool FastSimulator::restore(int id) {
-  if (id < 0 || id >= topo_.E.ids()) return false;
+  if (id < 0 || id >= topo_.E.size()) return false;
   const int e = topo_.E.phys[id];
   if (!can_restore(e)) return false;
   normals_valid_ = false;

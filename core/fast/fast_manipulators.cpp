@@ -49,7 +49,7 @@ void constrain_range(Vertices& V, const Manipulators& m, int begin, int end) {
 void FastSimulator::set_manipulators(const Manipulators& m) { manip_ = m; }
 
 int FastSimulator::live_slot(int id) const {
-  if (id < 0 || id >= topo_.V.ids()) return -1;
+  if (id < 0 || id >= topo_.V.size()) return -1;
   const int v = topo_.V.phys[id];
   return topo_.V.mass(v) > 0 ? v : -1;
 }
@@ -97,12 +97,10 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
   const Vertices& V = topo_.V;
   // Every id is one slot's, so the loop writes every entry (a free id's as zeros): the buffers
   // are resized, not cleared first (a serial fill of both, every frame, that the loop rewrites).
-  // Free slots (Slack) have no id and no entry.
-  out.positions.resize(3 * std::size_t(V.ids()));
-  out.normals.resize(3 * std::size_t(V.ids()));
+  out.positions.resize(3 * std::size_t(V.size()));
+  out.normals.resize(3 * std::size_t(V.size()));
   par_.run(V.size(), kPassGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
-      if (V.lid[v] < 0) continue;
       const bool live = V.mass(v) > 0;
       const std::size_t id = std::size_t(V.lid[v]);
       const Float4 p = live ? V.xm[v] : Float4{}, nv = live ? V.nr[v] : Float4{};
@@ -118,7 +116,7 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
 void FastSimulator::render_triangles(std::vector<std::uint32_t>& out) {
   constexpr int kAhead = 16;  ///< ids ahead whose triangle record is prefetched (a random slot)
   const Triangles& T = topo_.T;
-  const int n = T.ids(), blocks = Parallel::blocks_of(n, kReduceBlock);
+  const int n = T.size(), blocks = Parallel::blocks_of(n, kReduceBlock);
   // Fixed blocks of ids, each block's triangles at its offset: the buffer does not depend on
   // threads. A block's live triangles are its ids less its free ones (the free list holds
   // exactly the dead triangles' ids, Topology::check), counted from the free list rather than

@@ -77,7 +77,7 @@ Totals FastSimulator::totals() const {
   const Vertices& V = topo_.V;
   const Edges& E = topo_.E;
   const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
-  const int nv = V.ids(), ne = E.ids();
+  const int nv = V.size(), ne = E.size();
   std::vector<TotalsPart> parts(std::size_t(Parallel::blocks_of(std::max(nv, ne), kReduceBlock)));
   par_.run_blocks(nv, kReduceBlock, [&](int b, int begin, int end) { vertex_totals(V, c, begin, end, parts[b]); });
   par_.run_blocks(ne, kReduceBlock, [&](int b, int begin, int end) { edge_totals(E, V, begin, end, parts[b]); });
@@ -121,7 +121,7 @@ double FastSimulator::stiffness_bound() const {
 Snapshot FastSimulator::snapshot() const {
   const Vertices& V = topo_.V;
   Snapshot s;
-  for (int id = 0; id < V.ids(); ++id) {
+  for (int id = 0; id < V.size(); ++id) {
     const int v = V.phys[id];
     const bool alive = V.mass(v) > 0;
     s.vertex_alive.push_back(alive);
@@ -131,7 +131,7 @@ Snapshot FastSimulator::snapshot() const {
     s.mass.push_back(alive ? V.mass(v) : 0.0);
   }
   auto vid = [&](int v) { return v >= 0 ? int(V.lid[v]) : v; };
-  for (int id = 0; id < topo_.E.ids(); ++id) {
+  for (int id = 0; id < topo_.E.size(); ++id) {
     const int e = topo_.E.phys[id];
     EdgeView ev;
     const std::uint8_t f = topo_.E[e].flags;
@@ -146,7 +146,7 @@ Snapshot FastSimulator::snapshot() const {
     }
     s.edges.push_back(ev);
   }
-  for (int id = 0; id < topo_.T.ids(); ++id) {
+  for (int id = 0; id < topo_.T.size(); ++id) {
     const int t = topo_.T.phys[id];
     s.triangles.push_back(topo_.T.alive[t] ? std::array<int, 3>{vid(topo_.T[t].v[0]), vid(topo_.T[t].v[1]), vid(topo_.T[t].v[2])}
                                            : std::array<int, 3>{-1, -1, -1});
@@ -158,7 +158,7 @@ std::vector<Vec3d> FastSimulator::normals() const {
   FastSimulator tmp(*this);
   tmp.compute_normals();
   std::vector<Vec3d> out;
-  for (int id = 0; id < tmp.topo_.V.ids(); ++id) {
+  for (int id = 0; id < tmp.topo_.V.size(); ++id) {
     const int v = tmp.topo_.V.phys[id];
     out.push_back({tmp.topo_.V.nr[v].x, tmp.topo_.V.nr[v].y, tmp.topo_.V.nr[v].z});
   }
@@ -171,7 +171,7 @@ std::vector<Vec3d> FastSimulator::forces() const {
   tmp.compute_forces();
   tmp.add_grab_forces();
   std::vector<Vec3d> out;
-  for (int id = 0; id < tmp.topo_.V.ids(); ++id) {
+  for (int id = 0; id < tmp.topo_.V.size(); ++id) {
     const int v = tmp.topo_.V.phys[id];
     const VertexForces& f = tmp.step_.forces;
     out.push_back({f.fx[v], f.fy[v], f.fz[v]});
@@ -181,7 +181,7 @@ std::vector<Vec3d> FastSimulator::forces() const {
 
 void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec3d>& v) {
   Vertices& V = topo_.V;
-  for (int k = 0; k < V.ids() && k < int(x.size()) && k < int(v.size()); ++k) {
+  for (int k = 0; k < V.size() && k < int(x.size()) && k < int(v.size()); ++k) {
     const int s = V.phys[k];
     if (!(V.mass(s) > 0)) continue;
     V.xm[s].x = float(x[k][0]), V.xm[s].y = float(x[k][1]), V.xm[s].z = float(x[k][2]);
@@ -192,7 +192,7 @@ void FastSimulator::set_state(const std::vector<Vec3d>& x, const std::vector<Vec
 
 void FastSimulator::set_masses(const std::vector<double>& m) {
   Vertices& V = topo_.V;
-  for (int k = 0; k < V.ids() && k < int(m.size()); ++k)
+  for (int k = 0; k < V.size() && k < int(m.size()); ++k)
     if (V.mass(V.phys[k]) > 0) V.set_mass(V.phys[k], float(m[k]));
 }
 

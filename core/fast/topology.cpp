@@ -337,7 +337,7 @@ void Topology::unlist_tri(int v, int entry) {
 }
 
 int Topology::live_vertices() const {
-  return V.ids() - int(V.free_ids.size());
+  return V.size() - int(V.free_ids.size());
 }
 int Topology::live_mesh_edges() const {
   return int(std::count_if(E.slots.begin(), E.slots.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == (kAlive | kMesh); }));
@@ -345,7 +345,7 @@ int Topology::live_mesh_edges() const {
 int Topology::live_auxiliary() const {
   return int(std::count_if(E.slots.begin(), E.slots.end(), [](const EdgeRecord& r) { return (r.flags & (kAlive | kMesh)) == kAlive; }));
 }
-int Topology::live_triangles() const { return T.ids() - int(T.free_ids.size()); }
+int Topology::live_triangles() const { return T.size() - int(T.free_ids.size()); }
 
 std::string Topology::check_blocks() const {
   const char* names[2] = {"springs", "tris"};
@@ -400,46 +400,28 @@ std::string Topology::check() const {
   return {};
 }
 
-// Logical ids and slots are inverse maps of each other: every id has a slot, and every slot but
-// the free ones (Slack) has an id; a free slot holds a dead element. The free lists.
+// Logical ids and slots are inverse maps of each other, over the same range; the free lists.
 std::string Topology::check_ids(std::vector<char>& dead_v, std::vector<char>& free_e) const {
-  auto bijective = [](const auto& lid, const auto& phys, std::size_t slots) {
-    if (lid.size() != slots || phys.size() > slots) return false;
-    for (std::size_t id = 0; id < phys.size(); ++id)
-      if (phys[id] < 0 || std::size_t(phys[id]) >= slots || lid[std::size_t(phys[id])] != std::int32_t(id)) return false;
-    for (std::size_t k = 0; k < slots; ++k)
-      if (lid[k] < -1 || lid[k] >= std::int32_t(phys.size()) || (lid[k] >= 0 && phys[std::size_t(lid[k])] != std::int32_t(k))) return false;
+  auto bijective = [](const auto& lid, const auto& phys) {
+    if (lid.size() != phys.size()) return false;
+    for (std::size_t k = 0; k < lid.size(); ++k)
+      if (lid[k] < 0 || std::size_t(lid[k]) >= phys.size() || phys[std::size_t(lid[k])] != std::int32_t(k)) return false;
     return true;
   };
-  if (!bijective(V.lid, V.phys, V.xm.size())) return "vertex logical ids are not a bijection";
-  if (!bijective(E.lid, E.phys, E.slots.size())) return "edge logical ids are not a bijection";
-  if (!bijective(T.lid, T.phys, T.slots.size())) return "triangle logical ids are not a bijection";
+  if (!bijective(V.lid, V.phys) || V.lid.size() != V.xm.size()) return "vertex logical ids are not a bijection";
+  if (!bijective(E.lid, E.phys) || E.lid.size() != E.slots.size()) return "edge logical ids are not a bijection";
+  if (!bijective(T.lid, T.phys) || T.lid.size() != T.slots.size()) return "triangle logical ids are not a bijection";
   dead_v.assign(std::size_t(V.size()), 0), free_e.assign(std::size_t(E.size()), 0);
   std::vector<char> free_t(std::size_t(T.size()), 0);
   for (int v : V.free_ids) dead_v[V.phys[v]] = 1;
   for (int e : E.free_ids) free_e[E.phys[e]] = 1;
-  for (int v = 0; v < V.size(); ++v) {
-    if (V.lid[v] >= 0) continue;
-    if (V.mass(v) != 0 || V.spring_list[v].count || V.tri_list[v].count) return describe("free vertex slot ", v, " is not empty");
-    dead_v[v] = 1;
-  }
-  for (int e = 0; e < E.size(); ++e) {
-    if (E.lid[e] >= 0) continue;
-    if (E[e].flags) return describe("free edge slot ", e, " holds an edge");
-    free_e[e] = 1;
-  }
-  // The free triangle ids are exactly the dead slots with ids, each once, and a dead slot is
-  // kNoFace (the render buffers count live triangles from the free list and skip faces without
-  // sides).
+  // The free triangle ids are exactly the dead slots', each once, and a dead slot is kNoFace
+  // (the render buffers count live triangles from the free list and skip faces without sides).
   for (int id : T.free_ids) {
-    if (id < 0 || id >= T.ids() || free_t[T.phys[id]]) return describe("triangle free list holds bad id ", id);
+    if (id < 0 || id >= T.size() || free_t[T.phys[id]]) return describe("triangle free list holds bad id ", id);
     free_t[T.phys[id]] = 1;
   }
   for (int t = 0; t < T.size(); ++t) {
-    if (T.lid[t] < 0) {
-      if (T.alive[t] || T[t].e != kNoFace.e) return describe("free triangle slot ", t, " holds a triangle");
-      continue;
-    }
     if (bool(free_t[t]) == bool(T.alive[t])) return describe("triangle ", t, " is ", T.alive[t] ? "live on" : "dead off", " the free list");
     if (!T.alive[t] && T[t].e != kNoFace.e) return describe("dead triangle ", t, " is not kNoFace");
   }

@@ -121,8 +121,7 @@ struct Vertices {
   std::vector<int> free_ids;      ///< LIFO free list of logical ids
   std::int64_t created = 0;       ///< vertices taken since the last relayout (layout_stale)
 
-  int size() const { return int(xm.size()); }  ///< slots (ids and free slots: see Slack)
-  int ids() const { return int(phys.size()); }  ///< logical ids, live or on the free list
+  int size() const { return int(xm.size()); }
   float mass(int v) const { return xm[std::size_t(v)].w; }
   /// The mass lives in both rows' w (a pass reads it from whichever row it loads).
   void set_mass(int v, float m) { xm[std::size_t(v)].w = vm[std::size_t(v)].w = m; }
@@ -152,8 +151,7 @@ struct Edges {
 
   EdgeRecord& operator[](int e) { return slots[std::size_t(e)]; }
   const EdgeRecord& operator[](int e) const { return slots[std::size_t(e)]; }
-  int size() const { return int(slots.size()); }  ///< slots
-  int ids() const { return int(phys.size()); }    ///< logical ids
+  int size() const { return int(slots.size()); }
 };
 
 struct Triangles {
@@ -167,8 +165,7 @@ struct Triangles {
 
   Face& operator[](int t) { return slots[std::size_t(t)]; }
   const Face& operator[](int t) const { return slots[std::size_t(t)]; }
-  int size() const { return int(slots.size()); }  ///< slots
-  int ids() const { return int(phys.size()); }    ///< logical ids
+  int size() const { return int(slots.size()); }
   std::array<int, 3> corners(int t) const { return slots[std::size_t(t)].v; }
 };
 
