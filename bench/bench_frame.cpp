@@ -162,7 +162,11 @@ namespace {
 // normals at its start, where an adaptive step has them from its fracture test: that pass is in
 // both. The frozen frames keep the prepared mesh, which the adaptive ones grow by ~1 % a frame,
 // so the difference also holds the physics of the elements the events add; BM_Frozen's vertices
-// and edges counters are the adaptive dry run's.)
+// and edges counters are the adaptive dry run's.) BM_FrozenFresh/fast/<threads>/<N> times the
+// same frozen frames after one relayout of the prepared state (untimed): the prepared state lies
+// late in a relayout interval, a fifth of its vertices created since the last one and stored at
+// the arrays' ends, so the two bracket what the physics costs as the layout ages between
+// relayouts (docs/PERFORMANCE.md, "The frozen step on a fresh layout").
 /// A frozen frame's bytes floor (fast backend): substeps frozen steps on the prepared mesh,
 /// which the frozen frames keep (bytes_moved.h); and those bytes over the frame time.
 void set_floor_counters(benchmark::State& state, const Simulator& sim, int substeps) {
@@ -195,10 +199,12 @@ Batch api_batch(const Prepared& p, int k) {
   return b;  // the sheet is destroyed after the clock stopped
 }
 
-/// BM_Steps and BM_Frozen: params.substeps bare Simulator::step calls per frame.
-Batch step_batch(const Prepared& p, int k, bool frozen) {
+/// BM_Steps and BM_Frozen: params.substeps bare Simulator::step calls per frame; `fresh`
+/// (BM_FrozenFresh) relays the clone out first, untimed.
+Batch step_batch(const Prepared& p, int k, bool frozen, bool fresh) {
   std::unique_ptr<Simulator> sim = p.sim->clone();  // untimed: restore the prepared state
   if (frozen) sim->set_adaptivity(false, false);
+  if (fresh) sim->run_pass("layout");
   for (int s = 0; s < p.substeps; ++s) sim->step();  // untimed warm-up frame
   Batch b;
   const Clock::time_point t0 = Clock::now();
@@ -212,7 +218,7 @@ Batch step_batch(const Prepared& p, int k, bool frozen) {
   return b;
 }
 
-enum class Timed { Api, Steps, Frozen };
+enum class Timed { Api, Steps, Frozen, FrozenFresh };
 
 void BM_Frame(benchmark::State& state, const std::string& backend, int threads, int n, Timed timed,
               Config config) {
@@ -221,14 +227,14 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   if (!prep) return;
   Prepared& p = *prep;
   const int k = frames_per_iteration(n);
-  const bool frozen = timed == Timed::Frozen;
+  const bool fresh = timed == Timed::FrozenFresh, frozen = fresh || timed == Timed::Frozen;
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
   long mismatch = 0;
   for (auto _ : state) {
     Batch b;
     try {
-      b = timed == Timed::Api ? api_batch(p, k) : step_batch(p, k, frozen);
+      b = timed == Timed::Api ? api_batch(p, k) : step_batch(p, k, frozen, fresh);
     } catch (const Error& e) {  // the dry run was stable, so only a broken determinism gets here
       state.SkipWithError(e.what());
       break;
@@ -299,6 +305,7 @@ void register_frame_benchmarks() {
     for (int n : kPricedSizes) {
       add("Steps", n, Timed::Steps, Config::Paper);
       add("Frozen", n, Timed::Frozen, Config::Paper);
+      if (!reference) add("FrozenFresh", n, Timed::FrozenFresh, Config::Paper);
     }
     if (reference || threads != 2) return;
     for (int n : kPairedSizes)

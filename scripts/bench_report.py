@@ -31,6 +31,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
+FROZEN_FRESH = re.compile(r"^BM_FrozenFresh/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
@@ -373,18 +374,37 @@ def roofline_section(benches, charts):
                          f"{f'{share:.0f} %' if math.isfinite(share) else '-'} |")
         lines.append("")
     if frozen:
-        lines += ["The frozen step (`BM_Frozen`: normals, edge_forces, gather, integrate on the prepared mesh) against "
-                  "its bandwidth floor, the time its counted bytes take at the best STREAM bandwidth on its thread count:", "",
-                  "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex |",
-                  "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-        keys = order_configs({r[0] for r in frozen})
-        for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
-            ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
-            floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
-            bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
-            lines.append(f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {bound} | "
-                         f"{by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
-        lines.append("")
+        lines += frozen_floor_table(frozen, frame_series(benches, FROZEN_FRESH), stream)
+    return lines
+
+
+def frozen_floor_table(frozen, fresh, stream):
+    """The frozen step against its bandwidth floor, as prepared and (BM_FrozenFresh, where
+    measured) just after a relayout."""
+    with_fresh = any(fresh.values())
+    lines = ["The frozen step (`BM_Frozen`: normals, edge_forces, gather, integrate on the prepared mesh) against "
+             "its bandwidth floor, the time its counted bytes take at the best STREAM bandwidth on its thread count" +
+             (("; `BM_FrozenFresh` times the same frames after one relayout of the prepared state, whose vertices "
+               "are a fifth new since its last relayout and stored at the arrays' ends: the two bracket the step as "
+               "the layout ages between relayouts") if with_fresh else "") + ":", "",
+             "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex |" +
+             (" fresh layout ms | fresh / floor |" if with_fresh else ""),
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if with_fresh else "")]
+    keys = order_configs({r[0] for r in frozen})
+    for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
+        ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
+        floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
+        bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
+        row = (f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {bound} | "
+               f"{by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
+        if with_fresh:
+            f = fresh.get(key, {}).get(n)
+            if f is None:
+                row += " - | - |"
+            else:
+                row += f" {fmt_ms(f.median())} | " + (f"{f.median() / floor:.1f}x |" if math.isfinite(floor) else "- |")
+        lines.append(row)
+    lines.append("")
     return lines
 
 

@@ -1,8 +1,8 @@
 """scripts/bench_report.py on synthetic benchmarks: the rooflines (class Rooflines: the STREAM
 roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor is its modelled
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
-busy-machine verdict (class MachineLoad) and the cost per vertex against N = 128 (class
-PerVertex). Wrong code the rooflines catch: the gather kernel taken as the roof (it is the
+busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
+PerVertex) and the frozen step on a fresh layout beside the prepared one (class FrozenFresh). Wrong code the rooflines catch: the gather kernel taken as the roof (it is the
 lowest, so every pass would look closer to memory-bound), the floor computed from the streaming
 rate or from the other thread count's line rate, bytes read as lines; each class names its own."""
 import os
@@ -124,3 +124,22 @@ class Pairs(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class FrozenFresh(unittest.TestCase):
+    """BM_FrozenFresh sits beside BM_Frozen of the same configuration and N, against the same
+    floor. Wrong code this catches: a fresh time paired by N alone (here the 1-thread row would
+    take the 2-thread fresh time) or by configuration alone (the 512 one), BM_FrozenFresh read as
+    a frozen row of its own, its ratio against another thread count's roof."""
+
+    def test_fresh_layout_beside_the_prepared_one(self):
+        b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}  # roofs 14 (1t) and 19 (2t)
+        for name, ms in [("BM_Frozen/fast/2/256/manual_time", 10.0), ("BM_Frozen/fast/1/256/manual_time", 20.0),
+                         ("BM_FrozenFresh/fast/2/256/manual_time", 7.0), ("BM_FrozenFresh/fast/2/512/manual_time", 30.0)]:
+            b[name] = bench(name, ms, bytes=95e6, vertices=100000)
+        lines = bench_report.roofline_section(b, {})
+        rows = [line for line in lines if line.startswith("| fast")]
+        self.assertEqual(len(rows), 2, rows)
+        # 95 MB at 19 GB/s: 5 ms (2.0x, fresh 1.4x); at 14 GB/s: 6.79 ms (2.9x), no fresh run.
+        self.assertTrue(rows[0].startswith("| fast 1t | 256 |") and rows[0].endswith("| 6.79 | 2.9x | 4.8 | 200 | - | - |"), rows[0])
+        self.assertTrue(rows[1].startswith("| fast 2t | 256 |") and rows[1].endswith("| 5 | 2.0x | 9.5 | 100 | 7 | 1.4x |"), rows[1])
