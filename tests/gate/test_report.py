@@ -2,9 +2,10 @@
 roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor is its modelled
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
 busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
-PerVertex) and the frozen step on a fresh layout beside the prepared one (class FrozenFresh). Wrong code the rooflines catch: the gather kernel taken as the roof (it is the
-lowest, so every pass would look closer to memory-bound), the floor computed from the streaming
-rate or from the other thread count's line rate, bytes read as lines; each class names its own."""
+PerVertex) and the frozen step on a fresh layout beside the prepared one (class FrozenFresh).
+Wrong code the rooflines catch: the gather kernel taken as the roof (it is the lowest, so every
+pass would look closer to memory-bound), the floor computed from the streaming rate or from the
+other thread count's line rate, bytes read as lines; each class names its own."""
 import os
 import sys
 import unittest
@@ -122,10 +123,6 @@ class Pairs(unittest.TestCase):
         self.assertEqual(table, ["| fast 2t against 1t | 512 | 95 | 50 | 1.70x | 1.50x | 1.90x | 3 |"])
 
 
-if __name__ == "__main__":
-    unittest.main()
-
-
 class FrozenFresh(unittest.TestCase):
     """BM_FrozenFresh sits beside BM_Frozen of the same configuration and N, against the same
     floor. Wrong code this catches: a fresh time paired by N alone (here the 1-thread row would
@@ -143,3 +140,7 @@ class FrozenFresh(unittest.TestCase):
         # 95 MB at 19 GB/s: 5 ms (2.0x, fresh 1.4x); at 14 GB/s: 6.79 ms (2.9x), no fresh run.
         self.assertTrue(rows[0].startswith("| fast 1t | 256 |") and rows[0].endswith("| 6.79 | 2.9x | 4.8 | 200 | - | - |"), rows[0])
         self.assertTrue(rows[1].startswith("| fast 2t | 256 |") and rows[1].endswith("| 5 | 2.0x | 9.5 | 100 | 7 | 1.4x |"), rows[1])
+
+
+if __name__ == "__main__":
+    unittest.main()
