@@ -87,4 +87,14 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   Array& operator=(Array&&) noexcept = default;
 };
 
+/// Resizes scratch (a std::vector or an Array whose content the caller rewrites) to n elements,
+/// at least doubling its room when it must grow. std::vector grows from its size, so a scratch
+/// used at alternating lengths (edges, then triangles) or growing a little at every use would
+/// be reallocated at nearly every use, and each new buffer's pages faulted in again.
+template <class V>
+void resize_scratch(V& v, std::size_t n) {
+  if (n > v.capacity()) v.reserve(std::max(n, 2 * v.capacity()));
+  v.resize(n);
+}
+
 }  // namespace crumple::fast

@@ -30,6 +30,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   vertex_stamp_.reserve_warm(room * nv);
   rounds_.reserve(room * nv);
   waves_.reserve(room * nv);
+  layout_scratch_.reserve(room * nv, room * 2 * nt, room * nt, par_.threads());
   for (int k = 0; k < nv; ++k) {
     const int v = topo_.new_vertex();
     topo_.V.rest[v] = Float4{float(scene_.rest[k][0]), float(scene_.rest[k][1]), float(scene_.rest[k][2]), 0.0f};

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <type_traits>
 #include <utility>
 
 #include "fast/radix.h"
@@ -34,11 +33,11 @@ std::uint64_t spread3(std::uint64_t v) {
 /// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits) into `order`, in as
 /// few passes of at most kMaxDigit bits as cover them (stable: the order is the same whatever
 /// the digits).
-void radix_order(const Parallel& par, LayoutScratch& s, int bits, std::vector<int>& order) {
+void radix_order(const Parallel& par, LayoutScratch& s, int bits, Array<int>& order) {
   const int n = int(s.code.size());
-  order.resize(n);
-  s.idx.resize(n);
-  s.code2.resize(n);
+  resize_scratch(order, n);
+  resize_scratch(s.idx, n);
+  resize_scratch(s.code2, n);
   for (int k = 0; k < n; ++k) order[k] = k;
   const RadixDigits d = radix_digits(bits);
   const int digit_bits = d.bits;
@@ -56,8 +55,8 @@ void radix_order(const Parallel& par, LayoutScratch& s, int bits, std::vector<in
 }
 
 /// Stable counting sort of the slots by s.key (values in [0, buckets)) into `order`.
-void counting_order(const Parallel& par, LayoutScratch& s, int buckets, std::vector<int>& order) {
-  order.resize(s.key.size());
+void counting_order(const Parallel& par, LayoutScratch& s, int buckets, Array<int>& order) {
+  resize_scratch(order, s.key.size());
   const int* key = s.key.data();
   stable_pass(par, s.count, int(s.key.size()), buckets, [&](int k) { return key[k]; },
               [&](int k, int to) { order[to] = k; });
@@ -66,68 +65,55 @@ void counting_order(const Parallel& par, LayoutScratch& s, int buckets, std::vec
 /// of[old] = new from order[new] = old (each entry written once: no race).
 template <class From, class To>
 void inverse(const Parallel& par, const From& order, To& of) {
-  of.resize(order.size());
+  resize_scratch(of, order.size());
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) of[order[k]] = k;
   });
 }
 
-/// The spare buffer of element type T.
-template <class T> Array<T>& spare(LayoutScratch& s);
-template <> Array<ListHead>& spare(LayoutScratch& s) { return s.spare_heads; }
-template <> Array<std::int32_t>& spare(LayoutScratch& s) { return s.spare_i; }
-template <> Array<std::uint8_t>& spare(LayoutScratch& s) { return s.spare_u8; }
-template <> Array<Float4>& spare(LayoutScratch& s) { return s.spare_f4; }
-template <> Array<EdgeRecord>& spare(LayoutScratch& s) { return s.spare_edges; }
-template <> Array<Face>& spare(LayoutScratch& s) { return s.spare_faces; }
-
-/// One array of a permutation group: a[new] = rename(a[order[new]], order[new]).
+/// One array of a permutation group: a[new] = rename(a[order[new]], order[new]), gathered into
+/// `spare`, which then swaps with a.
 template <class T, class F>
 struct Gathered {
-  using value_type = T;
   Array<T>& a;
+  Array<T>& spare;
   F rename;
   const T* src = nullptr;
   T* dst = nullptr;
 };
 template <class T, class F>
-Gathered<T, F> gathered(Array<T>& a, F rename) {
-  return {a, rename};
+Gathered<T, F> gathered(Array<T>& a, Array<T>& spare, F rename) {
+  return {a, spare, rename};
 }
 template <class T>
-auto gathered(Array<T>& a) {
-  return gathered(a, [](const T& v, int) { return v; });
+auto gathered(Array<T>& a, Array<T>& spare) {
+  return gathered(a, spare, [](const T& v, int) { return v; });
 }
-
-template <class T, class... U>
-constexpr bool kDistinct = (!std::is_same_v<T, U> && ...) && kDistinct<U...>;
-template <class T>
-constexpr bool kDistinct<T> = true;
 
 /// Readies a spare buffer to receive n elements gathered from `from` and then to swap with it:
-/// at least from's room, so the swap keeps the array's reserved room.
+/// at least from's room, so the swap keeps the array's reserved room. Growing it drops its old
+/// content first (a reserve would copy it); the elements that resize adds are value-initialized,
+/// which is why arrays of different lengths do not share a spare (LayoutScratch).
 template <class T>
 T* ready_spare(Array<T>& out, const Array<T>& from, std::size_t n) {
-  if (out.capacity() < from.capacity()) out.reserve(from.capacity());
+  if (out.capacity() < from.capacity()) out.clear(), out.reserve(from.capacity());
   out.resize(n);
   return out.data();
 }
 
-/// Readies g to gather into its type's spare buffer.
+/// Readies g to gather into its spare buffer.
 template <class G>
-void ready(LayoutScratch& s, G& g) {
+void ready(G& g) {
   g.src = g.a.data();
-  g.dst = ready_spare(spare<typename G::value_type>(s), g.a, g.a.size());
+  g.dst = ready_spare(g.spare, g.a, g.a.size());
 }
 
 /// Gathers every array of one group in the new order, in one loop over `order` (one read of
-/// the order and one loop for all of them). Each array gathers into the spare buffer of its
-/// element type (hence distinct types within a group), which then swaps with it, keeping the
-/// array's reserved room.
+/// the order and one loop for all of them). Each array gathers into its own spare buffer, which
+/// then swaps with it, keeping the array's reserved room.
 template <class... G>
-void permute(const Parallel& par, LayoutScratch& s, const std::vector<int>& order, G... g) {
-  static_assert(kDistinct<typename G::value_type...>, "one spare buffer per element type");
-  (ready(s, g), ...);
+void permute(const Parallel& par, const Array<int>& order, G... g) {
+  (ready(g), ...);
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     const int* __restrict o = order.data();
     auto copy = [&](int k) {
@@ -145,18 +131,23 @@ void permute(const Parallel& par, LayoutScratch& s, const std::vector<int>& orde
     }
     for (int k = ahead; k < e; ++k) copy(k);
   });
-  (g.a.swap(spare<typename G::value_type>(s)), ...);
+  (g.a.swap(g.spare), ...);
 }
+
+/// One adjacency pool and the spare buffer it is repacked into.
+struct Pool {
+  Array<std::int32_t>& a;
+  Array<std::int32_t>& spare;
+};
 
 /// Repacks one adjacency pool (list) and its parallel pool in the new vertex order: the vertex
 /// now in slot k (heads already permuted) gets a block of room_for(count) entries, the blocks
 /// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
 /// left. f and g rename the entries of list and parallel; both pools are copied in one loop.
 template <class F, class G>
-void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Array<std::int32_t>& parallel,
-            Array<ListHead>& heads, F f, G g) {
+void repack(const Parallel& par, LayoutScratch& s, Pool list, Pool parallel, Array<ListHead>& heads, F f, G g) {
   const int n = int(heads.size());
-  s.at_old.resize(n);
+  resize_scratch(s.at_old, n);
   std::int64_t total = 0;  // a serial prefix sum: a few ns per vertex, and relayout is rare
   for (int k = 0; k < n; ++k) {
     ListHead& h = heads[k];
@@ -165,10 +156,10 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
     h.at = std::int32_t(total);
     total += h.room;
   }
-  std::int32_t* __restrict to_list = ready_spare(s.spare_i, list, std::size_t(total));
-  std::int32_t* __restrict to_parallel = ready_spare(s.spare_i2, parallel, std::size_t(total));
-  const std::int32_t* __restrict from_list = list.data();
-  const std::int32_t* __restrict from_parallel = parallel.data();
+  std::int32_t* __restrict to_list = ready_spare(list.spare, list.a, std::size_t(total));
+  std::int32_t* __restrict to_parallel = ready_spare(parallel.spare, parallel.a, std::size_t(total));
+  const std::int32_t* __restrict from_list = list.a.data();
+  const std::int32_t* __restrict from_parallel = parallel.a.data();
   const ListHead* __restrict head = heads.data();
   const std::int32_t* __restrict at_old = s.at_old.data();
   par.run(n, kGrain, [&](int b, int e) {
@@ -181,8 +172,8 @@ void repack(const Parallel& par, LayoutScratch& s, Array<std::int32_t>& list, Ar
       }
     }
   });
-  list.swap(s.spare_i);
-  parallel.swap(s.spare_i2);
+  list.a.swap(list.spare);
+  parallel.a.swap(parallel.spare);
 }
 
 /// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
@@ -209,7 +200,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int bits = std::clamp(int(std::ceil(std::log2(std::max(n, 2)) / 2)) + 2, 4, 21);
   const double extent = std::max({double(hi[0]) - lo[0], double(hi[1]) - lo[1], double(hi[2]) - lo[2], 1e-30});
   const double scale = double((1 << bits) - 1) / extent;
-  s.code.resize(n);
+  resize_scratch(s.code, n);
   par.run(n, kGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
       if (!(V.mass(v) > 0)) {
@@ -232,12 +223,21 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
 }  // namespace
 
 namespace {
-template <class T>
-void copy_warm(Array<T>& to, const Array<T>& from) {
+// A copy's scratch gets the original's room, faulted in as far as the original's has been used
+// (its size; the sort keys as far as the edges'), and not its content, which the next relayout
+// rewrites: a clone's relayouts then take the page faults that the original's would and no
+// others (a plain vector copy has no room, so the clone's first relayout would reallocate every
+// scratch vector and fault in all of it: docs/PERFORMANCE.md).
+template <class V>
+void copy_room(V& to, const V& from, std::size_t used) {
   to.clear();
   to.reserve(from.capacity());
-  to.resize(from.size());  // touches what relayout writes, and then the room ahead
-  to.keep_warm();
+  to.resize(std::min(std::max(used, from.size()), from.capacity()));
+  to.resize(from.size());
+}
+template <class V>
+void copy_room(V& to, const V& from) {
+  copy_room(to, from, from.size());
 }
 }  // namespace
 
@@ -245,16 +245,34 @@ LayoutScratch::LayoutScratch(const LayoutScratch& o) { *this = o; }
 
 LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
   if (this == &o) return *this;
-  vorder = o.vorder, vnew = o.vnew, eorder = o.eorder, enew = o.enew, torder = o.torder, tnew = o.tnew;
-  key = o.key, idx = o.idx, count = o.count, code = o.code, code2 = o.code2, at_old = o.at_old;
-  copy_warm(spare_heads, o.spare_heads);
-  copy_warm(spare_i, o.spare_i);
-  copy_warm(spare_i2, o.spare_i2);
-  copy_warm(spare_u8, o.spare_u8);
-  copy_warm(spare_f4, o.spare_f4);
-  copy_warm(spare_edges, o.spare_edges);
-  copy_warm(spare_faces, o.spare_faces);
+  for (auto member : {&LayoutScratch::vorder, &LayoutScratch::vnew, &LayoutScratch::eorder, &LayoutScratch::enew,
+                      &LayoutScratch::torder, &LayoutScratch::tnew, &LayoutScratch::idx, &LayoutScratch::count,
+                      &LayoutScratch::at_old})
+    copy_room(this->*member, o.*member);
+  copy_room(key, o.key, o.eorder.size());
+  copy_room(code, o.code);
+  copy_room(code2, o.code2);
+  for (auto member : {&LayoutScratch::spare_vid, &LayoutScratch::spare_eid, &LayoutScratch::spare_tid,
+                      &LayoutScratch::spare_springs, &LayoutScratch::spare_nbrs, &LayoutScratch::spare_tris,
+                      &LayoutScratch::spare_wings})
+    copy_room(this->*member, o.*member);
+  copy_room(spare_heads, o.spare_heads);
+  copy_room(spare_rows, o.spare_rows);
+  copy_room(spare_edges, o.spare_edges);
+  copy_room(spare_faces, o.spare_faces);
+  copy_room(spare_alive, o.spare_alive);
   return *this;
+}
+
+void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int threads) {
+  for (auto* v : {&vorder, &vnew, &idx, &at_old}) v->reserve(nv);
+  for (auto* v : {&eorder, &enew}) v->reserve(ne);
+  for (auto* v : {&torder, &tnew}) v->reserve(nt);
+  key.reserve(std::max(ne, nt));
+  code.reserve(nv);
+  code2.reserve(nv);
+  // The counting sorts' histograms: a block's counts per vertex slot (radix.h's stable_pass).
+  count.reserve(std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1));
 }
 
 bool layout_stale(const Topology& m, double fraction) {
@@ -273,14 +291,14 @@ void slot_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const int nv = V.size(), ne = E.size(), nt = T.size();
   vertex_order(par, V, s);
   inverse(par, s.vorder, s.vnew);
-  const std::vector<int>& vnew = s.vnew;
-  s.key.resize(ne);
+  const Array<int>& vnew = s.vnew;
+  resize_scratch(s.key, ne);
   par.run(ne, kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(vnew[E[k].a], vnew[E[k].b]) : nv;
   });
   counting_order(par, s, nv + 1, s.eorder);
   inverse(par, s.eorder, s.enew);
-  s.key.resize(nt);
+  resize_scratch(s.key, nt);
   par.run(nt, kGrain, [&](int b, int e) {
     for (int t = b; t < e; ++t)
       s.key[t] = T.alive[t] ? std::min({vnew[T[t].v[0]], vnew[T[t].v[1]], vnew[T[t].v[2]]}) : nv;
@@ -291,7 +309,7 @@ void slot_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
 
 /// Old slot -> new slot of each kind (-1, "none", stays -1).
 struct Renames {
-  const std::vector<int>&vnew, &enew, &tnew;
+  const Array<int>&vnew, &enew, &tnew;
   std::int32_t v(std::int32_t x) const { return x >= 0 ? std::int32_t(vnew[x]) : x; }
   std::int32_t e(std::int32_t x) const { return x >= 0 ? std::int32_t(enew[x]) : x; }
   std::int32_t t(std::int32_t x) const { return x >= 0 ? std::int32_t(tnew[x]) : x; }
@@ -299,46 +317,46 @@ struct Renames {
 
 // Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
 // next step before anything reads them), then the adjacency lists with their entries renamed.
-// Groups of distinct element types (one spare buffer per type).
+// A group's arrays have distinct spares.
 void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Renames& to) {
-  const std::vector<int>& vorder = s.vorder;
-  permute(par, s, vorder, gathered(V.xm), gathered(V.spring_list), gathered(V.lid));
-  permute(par, s, vorder, gathered(V.vm), gathered(V.tri_list));
-  permute(par, s, vorder, gathered(V.nr));
-  permute(par, s, vorder, gathered(V.rest));
-  repack(par, s, V.springs, V.nbrs, V.spring_list, [&](std::int32_t x) { return (to.enew[x >> 1] << 1) | (x & 1); },
-         [&](std::int32_t x) { return to.v(x); });
-  repack(par, s, V.tris, V.wings, V.tri_list, [&](std::int32_t x) { return (to.tnew[x >> 2] << 2) | (x & 3); },
-         [&](std::int32_t x) { return to.e(x); });
+  const Array<int>& vorder = s.vorder;
+  permute(par, vorder, gathered(V.xm, s.spare_rows), gathered(V.spring_list, s.spare_heads), gathered(V.lid, s.spare_vid));
+  permute(par, vorder, gathered(V.vm, s.spare_rows), gathered(V.tri_list, s.spare_heads));
+  permute(par, vorder, gathered(V.nr, s.spare_rows));
+  permute(par, vorder, gathered(V.rest, s.spare_rows));
+  repack(par, s, {V.springs, s.spare_springs}, {V.nbrs, s.spare_nbrs}, V.spring_list,
+         [&](std::int32_t x) { return (to.enew[x >> 1] << 1) | (x & 1); }, [&](std::int32_t x) { return to.v(x); });
+  repack(par, s, {V.tris, s.spare_tris}, {V.wings, s.spare_wings}, V.tri_list,
+         [&](std::int32_t x) { return (to.tnew[x >> 2] << 2) | (x & 3); }, [&](std::int32_t x) { return to.e(x); });
   V.garbage_e = V.garbage_t = 0;
 }
 
 // Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
 // itself, as the topology's convention says.
 void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Renames& to) {
-  permute(par, s, s.eorder,
-          gathered(E.slots,
+  permute(par, s.eorder,
+          gathered(E.slots, s.spare_edges,
                    [&](EdgeRecord r, int) {
                      if (r.flags & kAlive) r.a = to.v(r.a), r.b = to.v(r.b);
                      else r.a = r.b = 0;
                      r.wl = to.v(r.wl), r.wr = to.v(r.wr), r.tri0 = to.t(r.tri0), r.tri1 = to.t(r.tri1);
                      return r;
                    }),
-          gathered(E.lid));
+          gathered(E.lid, s.spare_eid));
 }
 
 // Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
 // per-step values that compute_normals writes for every slot before anything reads them.
 void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Renames& to) {
   const std::uint8_t* old_alive = T.alive.data();
-  permute(par, s, s.torder,
-          gathered(T.slots,
+  permute(par, s.torder,
+          gathered(T.slots, s.spare_faces,
                    [&](Face f, int from) {
                      const bool alive = old_alive[from];
                      for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(to.vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = to.e(f.e[k]);
                      return f;
                    }),
-          gathered(T.lid), gathered(T.alive));
+          gathered(T.lid, s.spare_tid), gathered(T.alive, s.spare_alive));
 }
 
 // Split records (free ones too: their stale ids stay in range and are overwritten on reuse).

@@ -23,26 +23,35 @@
 
 namespace crumple::fast {
 
-/// The memory relayout reuses from one call to the next (index maps, sort keys, one spare
-/// buffer per element type that each permuted array is gathered into and swapped with, and a
-/// second one for the adjacency pools, which are repacked in pairs), so that a relayout
-/// allocates nothing, and takes no page fault, once warm.
+/// The memory relayout reuses from one call to the next (index maps, sort keys, and the spare
+/// buffers that each permuted array is gathered into and swapped with), so that a warm relayout
+/// allocates nothing and takes page faults only where the state has grown past what earlier
+/// relayouts used. All of it is in Arrays, so that the large ones are on huge pages (aligned.h):
+/// a first touch of memory costs less per byte there. Arrays of one element type and one length
+/// share a spare; arrays of one type but different lengths (the three kinds' ids, the two
+/// adjacency pools) each have their own, since a spare that comes back from a shorter array
+/// must be grown, and value-initialized, before a longer one can be gathered into it.
 struct LayoutScratch {
   LayoutScratch() = default;
-  /// A copy (a clone of the simulator) gets spare buffers of the same room, already touched,
-  /// so that its first relayout takes no page faults either.
+  /// A copy (a clone of the simulator) gets the room of the original, touched as far as the
+  /// original's (layout.cpp's copy_room), so that its relayouts fault where the original's would.
   LayoutScratch(const LayoutScratch& o);
   LayoutScratch& operator=(const LayoutScratch& o);
+  /// Room for a state of up to nv vertex, ne edge and nt triangle slots on `threads` threads,
+  /// so that the scratch grows without reallocating (the spares take their arrays' room at the
+  /// first relayout).
+  void reserve(std::size_t nv, std::size_t ne, std::size_t nt, int threads);
 
-  std::vector<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
-  std::vector<std::int32_t> at_old;  ///< each vertex's old block start, by new slot (repacking)
-  std::vector<std::uint64_t> code, code2;
-  Array<ListHead> spare_heads;
-  Array<std::int32_t> spare_i, spare_i2;
-  Array<std::uint8_t> spare_u8;
-  Array<Float4> spare_f4;
+  Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
+  Array<int> at_old;  ///< each vertex's old block start, by new slot (repacking)
+  Array<std::uint64_t> code, code2;
+  Array<ListHead> spare_heads;  ///< the vertices' list heads
+  Array<Float4> spare_rows;     ///< the vertices' rows
+  Array<std::int32_t> spare_vid, spare_eid, spare_tid;  ///< each kind's logical ids
+  Array<std::int32_t> spare_springs, spare_nbrs, spare_tris, spare_wings;  ///< the pools
   Array<EdgeRecord> spare_edges;
   Array<Face> spare_faces;
+  Array<std::uint8_t> spare_alive;  ///< the triangles' alive bytes
 };
 
 /// Reorders the slots of m as described above and resets the vertices' `created` counter.

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "fast/aligned.h"
 #include "fast/parallel.h"
 
 namespace crumple::fast {
@@ -17,6 +18,9 @@ constexpr int kMaxDigit = 12;
 /// parallel loop's start to each pass, so smaller blocks do not repay them (a step's event keys,
 /// some thousands, sort faster in one block).
 constexpr int kRadixBlock = 16384;
+/// Most blocks a counting pass cuts its items into: the histograms (blocks x buckets) are summed
+/// serially, so their count is bounded whatever the thread count.
+constexpr int kMaxRadixBlocks = 8;
 
 /// How an LSD radix sort covers `bits` key bits: as few passes of at most kMaxDigit bits as
 /// cover them, each of `bits` digit bits (the last may reach past the key's top bit).
@@ -34,14 +38,14 @@ inline RadixDigits radix_digits(int bits) {
 /// The items are cut into one block per thread, each counted into its own histogram, the
 /// histograms summed in bucket-major order (serial, buckets x blocks), then each block places
 /// its items in index order: the ranks do not depend on the number of blocks, so the result is
-/// the serial pass's on any thread count.
-template <class Key, class Place>
-void stable_pass(const Parallel& par, std::vector<int>& hist, int n, int buckets, Key key, Place place) {
-  // At most 8 blocks: the histograms (blocks x buckets, summed serially) grow with the count.
-  const int wanted = std::clamp(n / kRadixBlock, 1, std::min(par.threads(), 8));
+/// the serial pass's on any thread count. hist (a vector of int) holds the histograms.
+template <class Hist, class Key, class Place>
+void stable_pass(const Parallel& par, Hist& hist, int n, int buckets, Key key, Place place) {
+  const int wanted = std::clamp(n / kRadixBlock, 1, std::min(par.threads(), kMaxRadixBlocks));
   const int per = std::max(1, (n + wanted - 1) / wanted);  // >= 1: no block of zero items
   const int blocks = Parallel::blocks_of(n, per);          // the blocks run_blocks runs
-  hist.assign(std::size_t(blocks) * buckets, 0);
+  resize_scratch(hist, std::size_t(blocks) * buckets);
+  std::fill(hist.begin(), hist.end(), 0);
   par.run_blocks(n, per, [&](int b, int begin, int end) {
     int* h = &hist[std::size_t(b) * buckets];
     for (int k = begin; k < end; ++k) ++h[key(k)];
