@@ -5,8 +5,12 @@
 // of one round take the fractions in a rotated order, so that every fraction meets the machine's
 // load at every position. Per run: the mean frame, each pass's share of it (the passes'
 // own timers), the relayouts and the longest one (a frame that relayouts is that much longer:
-// the hitch an engine sees). The summary gives per fraction the medians over the rounds.
+// the hitch an engine sees), and the page faults (first touches of memory, which cost some
+// microseconds each on a VM: docs/PERFORMANCE.md) a frame and in the frames that relayout.
+// The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -31,6 +35,8 @@ struct RunResult {
   double pass_ms[int(Pass::kCount)] = {};       ///< each pass's mean per frame
   int relayouts = 0;
   double longest_relayout_ms = 0;
+  double faults = 0;           ///< minor page faults a frame (mean)
+  double relayout_faults = 0;  ///< minor page faults a frame that relayouts (mean; 0 if none)
 };
 
 /// Parses a whole decimal integer or number, or exits with a one-line error naming it.
@@ -44,6 +50,13 @@ double number(const char* text, const char* what, bool integer) {
   return v;
 }
 
+/// The process's minor page faults so far.
+double minor_faults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_minflt);
+}
+
 RunResult run(const FastSimulator& prepared, const crumple::Params& params, int first_frame, int frames, double fraction) {
   std::unique_ptr<crumple::Simulator> clone = prepared.clone();
   auto& sim = static_cast<FastSimulator&>(*clone);
@@ -54,13 +67,21 @@ RunResult run(const FastSimulator& prepared, const crumple::Params& params, int 
   double seconds = 0;
   for (int f = 1; f <= frames; ++f) {
     const double layout_before = sim.pass_seconds()[int(Pass::Layout)];
+    const double faults_before = minor_faults();
     const auto t0 = std::chrono::steady_clock::now();
     crumple::run_frame(sim, params, first_frame + f);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double faults = minor_faults() - faults_before;
+    r.faults += faults;
     const double layout = sim.pass_seconds()[int(Pass::Layout)] - layout_before;
-    if (layout > 0) ++r.relayouts, r.longest_relayout_ms = std::max(r.longest_relayout_ms, 1e3 * layout);
+    if (layout > 0) {
+      ++r.relayouts, r.relayout_faults += faults;
+      r.longest_relayout_ms = std::max(r.longest_relayout_ms, 1e3 * layout);
+    }
   }
   r.frame_ms = 1e3 * seconds / frames;
+  r.faults /= frames;
+  if (r.relayouts > 0) r.relayout_faults /= r.relayouts;
   for (int k = 0; k < int(Pass::kCount); ++k) r.pass_ms[k] = 1e3 * (sim.pass_seconds()[k] - before[k]) / frames;
   return r;
 }
@@ -69,6 +90,28 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// Per fraction, the medians over the rounds of each run's figures.
+void print_medians(const std::map<double, std::vector<RunResult>>& results, int rounds) {
+  std::printf("\nmedians over %d rounds (ms a frame; relayout: the longest of a run; faults: page faults a frame)\n",
+              rounds);
+  std::printf("%-9s %8s %9s %10s", "fraction", "frame", "relayouts", "relayout");
+  for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14s", to_string(Pass(p)));
+  std::printf(" %8s %15s\n", "faults", "relayout_faults");
+  for (const auto& [fraction, runs] : results) {
+    auto med = [&](auto get) {
+      std::vector<double> v;
+      for (const RunResult& r : runs) v.push_back(get(r));
+      return median(v);
+    };
+    std::printf("%-9g %8.2f %9.1f %10.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
+                med([](const RunResult& r) { return double(r.relayouts); }),
+                med([](const RunResult& r) { return r.longest_relayout_ms; }));
+    for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14.2f", med([&](const RunResult& r) { return r.pass_ms[p]; }));
+    std::printf(" %8.0f %15.0f\n", med([](const RunResult& r) { return r.faults; }),
+                med([](const RunResult& r) { return r.relayout_faults; }));
+  }
 }
 
 }  // namespace
@@ -104,25 +147,10 @@ int main(int argc, char** argv) {
       std::printf("round %d, fraction %g: frame %.2f ms, %d relayouts (longest %.1f ms) |", round + 1, fraction,
                   r.frame_ms, r.relayouts, r.longest_relayout_ms);
       for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %s %.2f", to_string(Pass(p)), r.pass_ms[p]);
-      std::printf("\n");
+      std::printf(" | page faults %.0f a frame, %.0f a relayout frame\n", r.faults, r.relayout_faults);
       std::fflush(stdout);
     }
   }
-  std::printf("\nmedians over %d rounds (ms a frame; relayout: the longest of a run)\n", rounds);
-  std::printf("%-9s %8s %9s %10s", "fraction", "frame", "relayouts", "relayout");
-  for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14s", to_string(Pass(p)));
-  std::printf("\n");
-  for (const auto& [fraction, runs] : results) {
-    auto med = [&](auto get) {
-      std::vector<double> v;
-      for (const RunResult& r : runs) v.push_back(get(r));
-      return median(v);
-    };
-    std::printf("%-9g %8.2f %9.1f %10.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
-                med([](const RunResult& r) { return double(r.relayouts); }),
-                med([](const RunResult& r) { return r.longest_relayout_ms; }));
-    for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14.2f", med([&](const RunResult& r) { return r.pass_ms[p]; }));
-    std::printf("\n");
-  }
+  print_medians(results, rounds);
   return 0;
 }

@@ -35,6 +35,7 @@ FROZEN_FRESH = re.compile(r"^BM_FrozenFresh/(?P<backend>[^/]+)/(?P<threads>\d+)/
 STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
+FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
 DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PAIR = re.compile(r"^BM_Pair/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
@@ -274,6 +275,30 @@ def stream_bandwidth(benches):
     return out
 
 
+def first_touch(benches):
+    """{pages: median us a 4 KiB of first touch} from BM_FirstTouch's us_per_4kib."""
+    out = {}
+    for name, b in benches.items():
+        m = FIRST_TOUCH.match(name)
+        if m and b.times:
+            out[m["pages"]] = b.counter("us_per_4kib")
+    return out
+
+
+def first_touch_lines(benches, stream):
+    """The report's sentence on what a first touch of memory costs, against streaming 4 KiB."""
+    touch = first_touch(benches)
+    if not touch:
+        return []
+    costs = ", ".join(f"{us:.2f} us a 4 KiB on {'4 KiB' if pages == 'small' else pages} pages"
+                      for pages, us in sorted(touch.items(), key=lambda kv: kv[0] != "small"))
+    copy = 4096 / (roof(stream, 1) * 1e9) * 1e6  # nan without BM_Stream on 1 thread
+    against = f" (the best STREAM kernel moves 4 KiB in {copy:.2f} us on 1 thread)" if math.isfinite(copy) else ""
+    return [f"First touch of fresh memory (`BM_FirstTouch`, 1 thread, a write a 4 KiB page; the kernel maps "
+            f"and zeroes each page): {costs}{against}. Growth into memory not used before pays this once a "
+            "page, which is why the fast backend faults its reserved room in ahead (docs/DECISIONS.md D16).", ""]
+
+
 # BM_Stream's kernel that reads whole lines at random: the rate of scattered misses, no STREAM kernel.
 GATHER = "gather"
 
@@ -363,6 +388,7 @@ def roofline_section(benches, charts):
         for threads in sorted(stream):
             lines.append(f"| {threads} | " + " | ".join(f"{stream[threads].get(k, float('nan')):.1f}" for k in kernels) + " |")
         lines.append("")
+    lines += first_touch_lines(benches, stream)
     if "roofline.png" in charts:
         lines += ["![each pass against the measured bandwidth](roofline.png)", ""]
     if rows:

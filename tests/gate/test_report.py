@@ -2,7 +2,8 @@
 roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor is its modelled
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
 busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
-PerVertex) and the frozen step on a fresh layout beside the prepared one (class FrozenFresh).
+PerVertex), the frozen step on a fresh layout beside the prepared one (class FrozenFresh) and
+the first touch of memory against streaming (class FirstTouch).
 Wrong code the rooflines catch: the gather kernel taken as the roof (it is the lowest, so every
 pass would look closer to memory-bound), the floor computed from the streaming rate or from the
 other thread count's line rate, bytes read as lines; each class names its own."""
@@ -140,6 +141,24 @@ class FrozenFresh(unittest.TestCase):
         # 95 MB at 19 GB/s: 5 ms (2.0x, fresh 1.4x); at 14 GB/s: 6.79 ms (2.9x), no fresh run.
         self.assertTrue(rows[0].startswith("| fast 1t | 256 |") and rows[0].endswith("| 6.79 | 2.9x | 4.8 | 200 | - | - |"), rows[0])
         self.assertTrue(rows[1].startswith("| fast 2t | 256 |") and rows[1].endswith("| 5 | 2.0x | 9.5 | 100 | 7 | 1.4x |"), rows[1])
+
+
+class FirstTouch(unittest.TestCase):
+    """BM_FirstTouch's cost a 4 KiB per kind of page, set against the 1-thread STREAM roof.
+    Wrong code this catches: the iteration time read instead of the us_per_4kib counter, the
+    kinds of page swapped or mislabelled, the 2-thread roof (0.22 us) instead of 1 thread's."""
+
+    def test_cost_per_page_kind_against_streaming(self):
+        b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}  # roof 14 GB/s on 1 thread
+        for pages, us in [("huge", 5.0), ("small", 12.0)]:
+            name = f"BM_FirstTouch/{pages}/64/manual_time"
+            b[name] = bench(name, 99.0, us_per_4kib=us)
+        text = " ".join(bench_report.roofline_section(b, {}))
+        self.assertIn("12.00 us a 4 KiB on 4 KiB pages, 5.00 us a 4 KiB on huge pages", text)
+        self.assertIn("moves 4 KiB in 0.29 us on 1 thread", text)  # 4096 B at 14 GB/s
+
+    def test_no_first_touch_run_no_sentence(self):
+        self.assertNotIn("First touch", " ".join(bench_report.roofline_section(benches(), {})))
 
 
 if __name__ == "__main__":
