@@ -38,10 +38,10 @@ struct AlignedAllocator {
 /// One attribute of the SoA state. A copy keeps the room reserved in the original (a plain
 /// vector copy would not), so a clone of a simulator appends without reallocating, as the
 /// original does: the benchmarks time frames of clones. Part of the room ahead of the elements
-/// is kept faulted in (an eighth of the capacity: some twenty frames of a crumple's growth),
-/// so that growth into it does not page-fault inside a step; the next part is touched when
-/// growth uses it up (keep_warm), one burst where there were hundreds of single faults
-/// (docs/DECISIONS.md D16).
+/// is kept faulted in (an eighth of the capacity: some twenty frames of a crumple's growth; all
+/// of it when it is smaller than a huge page), so that growth into it does not page-fault
+/// inside a step; the next part is touched when growth uses it up (keep_warm), one burst where
+/// there were hundreds of single faults (docs/DECISIONS.md D16).
 template <class T>
 class Array : public std::vector<T, AlignedAllocator<T>> {
   using Base = std::vector<T, AlignedAllocator<T>>;
@@ -62,6 +62,12 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     }
     return *this;
   }
+  /// std::vector's reserve, which moves the elements to new room that nothing has touched yet.
+  void reserve(std::size_t n) {
+    if (n <= this->capacity()) return;
+    Base::reserve(n);
+    warmed_ = 0;
+  }
   /// Reserves room for n elements, the first part of it faulted in (see the class comment).
   void reserve_warm(std::size_t n) {
     this->reserve(n);
@@ -75,7 +81,10 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   void keep_warm() {
     const std::size_t n = this->size();
     if (n < warmed_ && warmed_ <= this->capacity()) return;
-    warmed_ = std::min(this->capacity(), n + this->capacity() / 8);
+    // Room smaller than a huge page is faulted in whole: it is on small pages, whose faults cost
+    // the most (docs/PERFORMANCE.md), and it holds at most kHugePage bytes.
+    const bool small_pages = this->capacity() * sizeof(T) < kHugePage;
+    warmed_ = small_pages ? this->capacity() : std::min(this->capacity(), n + this->capacity() / 8);
     // A write a page, not a value-initialization of every element of the room: the elements are
     // initialized when growth constructs them.
     touch_pages(this->data() + n, this->data() + warmed_);

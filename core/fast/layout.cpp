@@ -132,6 +132,7 @@ void permute(const Parallel& par, const Array<int>& order, G... g) {
     for (int k = ahead; k < e; ++k) copy(k);
   });
   (g.a.swap(g.spare), ...);
+  (g.a.keep_warm(), ...);  // the spare's room ahead may be untouched: growth must not fault there
 }
 
 /// One adjacency pool and the spare buffer it is repacked into.
@@ -174,6 +175,8 @@ void repack(const Parallel& par, LayoutScratch& s, Pool list, Pool parallel, Arr
   });
   list.a.swap(list.spare);
   parallel.a.swap(parallel.spare);
+  list.a.keep_warm();
+  parallel.a.keep_warm();
 }
 
 /// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
@@ -228,15 +231,16 @@ namespace {
 // rewrites: a clone's relayouts then take the page faults that the original's would and no
 // others (a plain vector copy has no room, so the clone's first relayout would reallocate every
 // scratch vector and fault in all of it: docs/PERFORMANCE.md).
-template <class V>
-void copy_room(V& to, const V& from, std::size_t used) {
+template <class T>
+void copy_room(Array<T>& to, const Array<T>& from, std::size_t used) {
   to.clear();
   to.reserve(from.capacity());
   to.resize(std::min(std::max(used, from.size()), from.capacity()));
   to.resize(from.size());
+  to.keep_warm();  // and the room ahead, as the original's relayouts keep it (Array::keep_warm)
 }
-template <class V>
-void copy_room(V& to, const V& from) {
+template <class T>
+void copy_room(Array<T>& to, const Array<T>& from) {
   copy_room(to, from, from.size());
 }
 }  // namespace
