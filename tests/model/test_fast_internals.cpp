@@ -96,6 +96,45 @@ TEST(Array, SmallArraysStartOnALineLargeOnesOnAHugePage) {
   EXPECT_EQ(offset(large.data(), fast::kHugePage), 0u);
   for (int k = 0; k < 1000; ++k) ASSERT_EQ(large[k].x, float(k));
 }
+// Scratch resized at alternating lengths keeps its buffer: resize_scratch at least doubles the
+// room when it must grow. Catches a plain resize, which grows from the size (here 50 + 51) and
+// would reallocate, and fault in a new buffer, at the next longer use.
+TEST(Array, ScratchAtAlternatingLengthsKeepsItsBuffer) {
+  std::vector<int> v(100);
+  fast::resize_scratch(v, 50);
+  fast::resize_scratch(v, 101);
+  EXPECT_GE(v.capacity(), 200u);
+  const int* buffer = v.data();
+  fast::resize_scratch(v, 50);
+  fast::resize_scratch(v, 190);
+  EXPECT_EQ(v.data(), buffer);
+  EXPECT_EQ(v.size(), 190u);
+  fast::resize_scratch(v, 1000);  // past twice the room: exactly what is asked
+  EXPECT_EQ(v.size(), 1000u);
+  EXPECT_GE(v.capacity(), 1000u);
+}
+
+// A copy of the relayout's scratch (a clone's) has the original's room, so the clone's first
+// relayout reallocates nothing the original's would not. Catches a member copied as a plain
+// vector (room = size: every scratch vector reallocated and faulted in at the clone's first
+// relayout) or left out of the copy.
+TEST(Layout, ScratchCopyKeepsTheRoom) {
+  fast::LayoutScratch a;
+  a.reserve(1000, 3000, 2000, 2);
+  a.key.resize(10);
+  a.spare_springs.reserve(5000);
+  a.spare_rows.reserve(700);
+  const fast::LayoutScratch b(a);
+  EXPECT_GE(b.vorder.capacity(), 1000u);
+  EXPECT_GE(b.eorder.capacity(), 3000u);
+  EXPECT_GE(b.tnew.capacity(), 2000u);
+  EXPECT_GE(b.key.capacity(), 3000u);
+  EXPECT_EQ(b.key.size(), 10u);
+  EXPECT_GE(b.count.capacity(), 2u * 1001u);
+  EXPECT_GE(b.spare_springs.capacity(), 5000u);
+  EXPECT_GE(b.spare_rows.capacity(), 700u);
+}
+
 // touch_pages writes one byte in every 4 KiB page of [begin, end) and nothing outside it: a
 // write past `end` would corrupt the element after the warmed room, a skipped page would leave
 // a fault inside a step. Catches an off-by-one at either end and a stride other than the page.
