@@ -1,16 +1,18 @@
 // BM_FirstTouch/<pages>/<MiB>: what the machine charges for the first touch of memory (a page
 // fault: the kernel maps and zeroes a page), per 4 KiB, on 4 KiB pages ("small") and on
-// transparent huge pages ("huge", allocated as the fast backend allocates its large arrays,
+// transparent huge pages ("huge", advised as the fast backend advises its large arrays,
 // fast/aligned.h). A simulation that grows (refinement's new elements, a relayout's scratch)
 // pays this for every page it uses for the first time; on a virtual machine it can cost as much
 // as streaming a few hundred KiB (docs/PERFORMANCE.md), which is why the fast backend reserves
 // and faults in its room ahead (docs/DECISIONS.md D16).
-// Each iteration maps kTouchMiB of fresh memory, writes one byte a 4 KiB page (the timed part),
-// and unmaps it; one thread. Reported: us_per_4kib (the mean time a 4 KiB of first touch costs)
+// Each iteration maps kTouchMiB of fresh memory with mmap (not through an allocator, which may
+// hand back memory it kept from the previous iteration, already faulted in), writes one byte a
+// 4 KiB page (the timed part), and unmaps it; one thread. Reported: us_per_4kib (the mean time a 4 KiB of first touch costs)
 // and the time per iteration (manual time).
 #include <sys/mman.h>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "bench_common.h"
@@ -22,38 +24,39 @@ namespace {
 constexpr std::size_t kTouchMiB = 64;
 constexpr std::size_t kTouchBytes = kTouchMiB << 20;
 constexpr std::size_t kSmallPage = 4096;
+constexpr std::size_t kMapped = kTouchBytes + fast::kHugePage;  ///< room to align kTouchBytes in
 
 enum class Pages { Small, Huge };
 
-/// kTouchBytes of fresh, untouched memory: mapped anonymous with huge pages refused (Small), or
-/// from the fast backend's allocator, which asks for them (Huge). nullptr if the map failed.
-void* map_fresh(Pages pages) {
-  if (pages == Pages::Huge) return fast::allocate_aligned(kTouchBytes);
-  void* p = mmap(nullptr, kTouchBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-  if (p == MAP_FAILED) return nullptr;
-  madvise(p, kTouchBytes, MADV_NOHUGEPAGE);
-  return p;
-}
-
-void unmap(Pages pages, void* p) {
-  if (pages == Pages::Huge) fast::free_aligned(p, kTouchBytes);
-  else munmap(p, kTouchBytes);
+/// kTouchBytes of fresh, untouched memory, huge-page aligned, advised for huge pages or against
+/// them; `mapped` is what to unmap. p is null if the map failed.
+struct Fresh {
+  void* mapped = nullptr;
+  char* p = nullptr;
+};
+Fresh map_fresh(Pages pages) {
+  void* m = mmap(nullptr, kMapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (m == MAP_FAILED) return {};
+  const std::uintptr_t at = (reinterpret_cast<std::uintptr_t>(m) + fast::kHugePage - 1) / fast::kHugePage * fast::kHugePage;
+  char* p = reinterpret_cast<char*>(at);
+  madvise(p, kTouchBytes, pages == Pages::Huge ? MADV_HUGEPAGE : MADV_NOHUGEPAGE);
+  return {m, p};
 }
 
 void BM_FirstTouch(benchmark::State& state, Pages pages) {
   double seconds = 0;
   for (auto _ : state) {
-    void* p = map_fresh(pages);
-    if (!p) {
+    const Fresh fresh = map_fresh(pages);
+    if (!fresh.p) {
       state.SkipWithError("could not map memory to touch");
       return;
     }
     const Clock::time_point t0 = Clock::now();
-    fast::touch_pages(p, static_cast<char*>(p) + kTouchBytes);
+    fast::touch_pages(fresh.p, fresh.p + kTouchBytes);
     const double s = seconds_between(t0, Clock::now());
     state.SetIterationTime(s);
     seconds += s;
-    unmap(pages, p);
+    munmap(fresh.mapped, kMapped);
   }
   const double kib4 = double(kTouchBytes / kSmallPage) * double(state.iterations());
   state.counters["us_per_4kib"] = 1e6 * seconds / kib4;
