@@ -56,7 +56,7 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   }
   Array& operator=(const Array& o) {
     if (this != &o) {
-      if (this->capacity() < o.capacity()) this->reserve(o.capacity()), warmed_ = 0;
+      this->reserve(o.capacity());
       this->assign(o.begin(), o.end());
       keep_warm();
     }

@@ -225,49 +225,6 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
 
 }  // namespace
 
-namespace {
-// A copy's scratch gets the original's room, faulted in as far as the original's has been used
-// (its size; the sort keys as far as the edges'), and not its content, which the next relayout
-// rewrites: a clone's relayouts then take the page faults that the original's would and no
-// others (a plain vector copy has no room, so the clone's first relayout would reallocate every
-// scratch vector and fault in all of it: docs/PERFORMANCE.md).
-template <class T>
-void copy_room(Array<T>& to, const Array<T>& from, std::size_t used) {
-  to.clear();
-  to.reserve(from.capacity());
-  to.resize(std::min(std::max(used, from.size()), from.capacity()));
-  to.resize(from.size());
-  to.keep_warm();  // and the room ahead, as the original's relayouts keep it (Array::keep_warm)
-}
-template <class T>
-void copy_room(Array<T>& to, const Array<T>& from) {
-  copy_room(to, from, from.size());
-}
-}  // namespace
-
-LayoutScratch::LayoutScratch(const LayoutScratch& o) { *this = o; }
-
-LayoutScratch& LayoutScratch::operator=(const LayoutScratch& o) {
-  if (this == &o) return *this;
-  for (auto member : {&LayoutScratch::vorder, &LayoutScratch::vnew, &LayoutScratch::eorder, &LayoutScratch::enew,
-                      &LayoutScratch::torder, &LayoutScratch::tnew, &LayoutScratch::idx, &LayoutScratch::count,
-                      &LayoutScratch::at_old})
-    copy_room(this->*member, o.*member);
-  copy_room(key, o.key, o.eorder.size());
-  copy_room(code, o.code);
-  copy_room(code2, o.code2);
-  for (auto member : {&LayoutScratch::spare_vid, &LayoutScratch::spare_eid, &LayoutScratch::spare_tid,
-                      &LayoutScratch::spare_springs, &LayoutScratch::spare_nbrs, &LayoutScratch::spare_tris,
-                      &LayoutScratch::spare_wings})
-    copy_room(this->*member, o.*member);
-  copy_room(spare_heads, o.spare_heads);
-  copy_room(spare_rows, o.spare_rows);
-  copy_room(spare_edges, o.spare_edges);
-  copy_room(spare_faces, o.spare_faces);
-  copy_room(spare_alive, o.spare_alive);
-  return *this;
-}
-
 void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int threads) {
   for (auto* v : {&vorder, &vnew, &idx, &at_old}) v->reserve(nv);
   for (auto* v : {&eorder, &enew}) v->reserve(ne);

@@ -31,12 +31,10 @@ namespace crumple::fast {
 /// share a spare; arrays of one type but different lengths (the three kinds' ids, the two
 /// adjacency pools) each have their own, since a spare that comes back from a shorter array
 /// must be grown, and value-initialized, before a longer one can be gathered into it.
+///
+/// A copy (a clone of the simulator) keeps the original's room with its first part faulted in
+/// (Array's copy), so that the clone's relayouts fault about where the original's would.
 struct LayoutScratch {
-  LayoutScratch() = default;
-  /// A copy (a clone of the simulator) gets the room of the original, touched as far as the
-  /// original's (layout.cpp's copy_room), so that its relayouts fault where the original's would.
-  LayoutScratch(const LayoutScratch& o);
-  LayoutScratch& operator=(const LayoutScratch& o);
   /// Room for a state of up to nv vertex, ne edge and nt triangle slots on `threads` threads,
   /// so that the scratch grows without reallocating (the spares take their arrays' room at the
   /// first relayout).
