@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds crumple's benchmark harness (Release: -O3 -march=native) into build-bench/, runs it on
-# every core and writes, under results/<machine-tag>/ (e.g. results/amd-epyc_avx512/):
+# every core and writes, under results/<machine-tag>/ (e.g. results/amd-epyc-zen5_avx512/):
 #   frame.json      Google Benchmark JSON (every repetition, plus aggregates)
 #   run.json        the machine and how the run was made
 #   REPORT.md       machine, command, table, largest sheet at 60/30 fps, charts

@@ -584,17 +584,27 @@ def fmt_load(values):
     return ", ".join(f"{x:.2f}" for x in values) or "?"
 
 
+def cpu_line(m, context):
+    """The CPU as run.json's machine records it: model (with its core generation and family
+    where recorded: a VM may name CPUs of two generations alike), CPUs, caches, clock."""
+    model = m.get("model", "unknown CPU")
+    if m.get("microarchitecture"):
+        model += f" ({m['microarchitecture'].replace('zen', 'Zen ')}, family {m.get('family')} model {m.get('model_number')})"
+    hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
+    caches = (f"L2 {m.get('l2') or '?'}, L3 {m.get('l3') or '?'}" if m.get("l2") or m.get("l3")
+              else "caches not reported by lscpu")
+    return (f"{model}{hv}; {m.get('cpus', context.get('num_cpus', '?'))} CPUs "
+            f"({m.get('cores_per_socket', '?')} cores per socket, {m.get('threads_per_core', '?')} thread(s) per core); "
+            f"{caches}; {context.get('mhz_per_cpu', '?')} MHz")
+
+
 def machine_section(run, context):
     """The report's machine section: CPU, SIMD, compiler, load, caveats."""
     m = run.get("machine", {})
-    model = m.get("model", "unknown CPU")
     lines = []
     lines.append("## Machine")
     lines.append("")
-    hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
-    lines.append(f"- CPU: {model}{hv}; {m.get('cpus', context.get('num_cpus', '?'))} CPUs "
-                 f"({m.get('cores_per_socket', '?')} cores per socket, {m.get('threads_per_core', '?')} thread(s) per core); "
-                 f"L2 {m.get('l2', '?')}, L3 {m.get('l3', '?')}; {context.get('mhz_per_cpu', '?')} MHz")
+    lines.append(f"- CPU: {cpu_line(m, context)}")
     lines.append(f"- SIMD: **{m.get('simd', '?')}** (flags: {', '.join(m.get('flags', [])) or '?'})")
     lines.append(f"- Compiler: {m.get('compiler', '?')} (binary: {context.get('crumple_compiler', '?')}); "
                  f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")

@@ -478,7 +478,10 @@ def hero(binary, work, out, grid, frames, extra, frame_pick, perturb):
 
 
 # ----------------------------------------------------------------------------- main
-def main(argv=None):
+ALL_FIGURES = ("fig10", "fig11", "fig12", "fig6", "diag", "woody", "hero")
+
+
+def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--bin", default=os.path.join(ROOT, "build-fig", "app", "crumple"))
     p.add_argument("--out", default=None, help="default results/figures; with --quick "
@@ -501,210 +504,239 @@ def main(argv=None):
                    help="hero: out-of-plane perturbation amplitude (0 = flat grid)")
     p.add_argument("--hero-grid", type=int, default=64)
     p.add_argument("--hero-frame", type=int, default=0, help="frame to show (0: last)")
-    p.add_argument("--only", default="fig10,fig11,fig12,fig6,diag,woody,hero")
+    p.add_argument("--only", default=",".join(ALL_FIGURES))
     a = p.parse_args(argv)
     if a.quick:
         a.seeds, a.frames = 2, 120
     if a.out is None:
         a.out = (os.path.join(a.work, "quick-figures") if a.quick
                  else os.path.join(ROOT, "results", "figures"))
-    seeds = list(range(1, a.seeds + 1))
-    only = set(a.only.split(","))
-    extra = shlex.split(a.sim_args)
-    os.makedirs(a.out, exist_ok=True)
-    os.makedirs(a.work, exist_ok=True)
-    t_start = time.time()
-    common = ["--frames", str(a.frames)] + extra
-    every = max(1, a.frames // 6)
-    claims = {"config": {"binary": os.path.abspath(a.bin), "grid": a.grid, "frames": a.frames,
-                         "seeds": seeds, "sim_args": extra, "perturb": a.perturb,
-                         "git": git_describe(), "date": time.strftime("%Y-%m-%d %H:%M")}}
+    return a
 
-    def sweep(name, settings, seed_list=None):
+
+class Run:
+    """One run of this script: its options, the seed list and crumple arguments every sweep
+    shares, and the claims (every number, per seed) recorded so far."""
+
+    def __init__(self, a):
+        self.a = a
+        self.seeds = list(range(1, a.seeds + 1))
+        self.extra = shlex.split(a.sim_args)
+        self.common = ["--frames", str(a.frames)] + self.extra
+        self.every = max(1, a.frames // 6)
+        self.t_start = time.time()
+        self.claims = {"config": {"binary": os.path.abspath(a.bin), "grid": a.grid,
+                                  "frames": a.frames, "seeds": self.seeds,
+                                  "sim_args": self.extra, "perturb": a.perturb,
+                                  "git": git_describe(), "date": time.strftime("%Y-%m-%d %H:%M")}}
+
+    def sweep(self, name, settings, seed_list=None):
         """settings: list of (label, [args]) or (label, [args], perturbation amplitude).
         Returns list of (summary, runs)."""
+        a = self.a
         specs, idx = [], []
         for k, st in enumerate(settings):
             args = st[1]
             sheet = sheet_args(a.work, a.grid, st[2] if len(st) > 2 else a.perturb)
-            for s in seed_list or seeds:
+            for s in seed_list or self.seeds:
                 tag = "_".join(x.lstrip("-") for x in args) or "default"
                 tag = "".join(ch if ch.isalnum() or ch in "._=-" else "_" for ch in tag)[:60]
                 specs.append((os.path.join(a.work, name, f"{k}_{tag}_s{s}"),
-                              sheet + common + args + ["--seed", str(s)], every, 1.0))
+                              sheet + self.common + args + ["--seed", str(s)], self.every, 1.0))
                 idx.append(k)
         res = run_many(a.bin, a.jobs, specs)
-        out = []
-        for k in range(len(settings)):
-            runs = [r for r, i in zip(res, idx) if i == k]
-            out.append((summarize(runs), runs))
-        return out
+        return [(summarize(runs), runs)
+                for runs in ([r for r, i in zip(res, idx) if i == k] for k in range(len(settings)))]
 
-    def record(name, pname, values, settings, res, verdict):
-        claims[name] = {"parameter": pname, "settings": [
+    def record(self, name, pname, values, settings, res, verdict):
+        self.claims[name] = {"parameter": pname, "settings": [
             {"value": v, "args": args, "summary": s,
              "runs": [{k: r.get(k) for k in ["rc", "ok", "frames_run", "error", "wall_s"]
                        + METRICS if k in r} for r in runs]}
             for v, (lab, args, *_), (s, runs) in zip(values, settings, res)],
             "verdict": verdict}
 
-    def draw(png, title, pname, values, settings, res, metric, metric_label, extras, **kw):
+    def draw(self, png, title, pname, values, settings, res, metric, metric_label, extras, **kw):
         """sweep_figure of one sweep: labels, summaries and runs come from settings and res."""
-        sweep_figure(os.path.join(a.out, png), title, pname, values, [lab for lab, *_ in settings],
-                     [s for s, _ in res], [runs for _, runs in res], metric, metric_label,
-                     extras, **kw)
+        sweep_figure(os.path.join(self.a.out, png), title, pname, values,
+                     [lab for lab, *_ in settings], [s for s, _ in res], [runs for _, runs in res],
+                     metric, metric_label, extras, **kw)
 
-    if "fig10" in only:
-        vals = [0.0, 0.5, 0.75, 1.0]
-        st = [(f"phi = {v:g}", ["--phi", f"{v:g}", "--psi", "0.25"]) for v in vals]
-        res = sweep("fig10", st)
-        sm = [s for s, _ in res]
-        means = np.array([s["splits"]["mean"] for s in sm])
-        tr = trend(vals, means, decreasing=True)
-        verdict = {"claim": "smaller phi breaks more edges", "metric": "total splits",
-                   "means": means.tolist(), "trend": tr,
-                   "held": tr == "monotonic",
-                   "phi0_vs_phi1_separated": separated(sm[0]["splits"], sm[-1]["splits"])}
-        record("fig10", "phi", vals, st, res, verdict)
-        draw("fig10_phi.png",
-             f"Fig 10: phi sweep (psi = 0.25), grid {a.grid}, {a.frames} frames, "
-             f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
-             "phi", vals, st, res,
-             "splits", "total splits", [("rms", "rms", 3)])
-        print(f"fig10 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
+    def caption(self):
+        """The parameter sweeps' shared title tail: the scene, and what picture and numbers show."""
+        return (f"grid {self.a.grid}, {self.a.frames} frames, seed 1 shown, numbers mean ± s.d. "
+                f"over {len(self.seeds)} seeds")
 
-    if "fig11" in only:
-        vals = [0.0, 0.25, 0.5, 1.0]
-        st = [(f"psi = {v:g}", ["--psi", f"{v:g}", "--phi", "0.25"]) for v in vals]
-        res = sweep("fig11", st)
-        sm = [s for s, _ in res]
-        fr = np.array([s["rebreak_frac"]["mean"] for s in sm])
-        rb = np.array([s["rebreaks"]["mean"] for s in sm])
-        lr = np.array([s["late_rate"]["mean"] for s in sm])
-        spl = np.array([s["splits"]["mean"] for s in sm])
-        verdict = {"claim": "smaller psi makes broken edges break again more readily",
-                   "metric": "rebreak_frac: share of the held auxiliary springs whose edge was "
-                             "made by an earlier split (second-generation breaks)",
-                   "rebreak_frac_means": fr.tolist(), "rebreaks_means": rb.tolist(),
-                   "late_rate_means": lr.tolist(), "splits_means": spl.tolist(),
-                   "trend_rebreak_frac": trend(vals, fr), "trend_rebreaks": trend(vals, rb),
-                   "trend_late_rate": trend(vals, lr), "trend_splits": trend(vals, spl),
-                   "held": trend(vals, fr) == "monotonic",
-                   "psi0_vs_psi1_separated": separated(sm[0]["rebreak_frac"],
-                                                       sm[-1]["rebreak_frac"])}
-        record("fig11", "psi", vals, st, res, verdict)
-        draw("fig11_psi.png",
-             f"Fig 11: psi sweep (phi = 0.25), grid {a.grid}, {a.frames} frames, "
-             f"seed 1 shown, numbers mean ± s.d. over {len(seeds)} seeds",
-             "psi", vals, st, res,
-             "rebreak_frac", "re-broken share of held springs",
+    def done(self, what):
+        print(f"{what} done ({time.time() - self.t_start:.0f} s)", file=sys.stderr)
+
+
+def fig10_phi(run):
+    vals = [0.0, 0.5, 0.75, 1.0]
+    st = [(f"phi = {v:g}", ["--phi", f"{v:g}", "--psi", "0.25"]) for v in vals]
+    res = run.sweep("fig10", st)
+    sm = [s for s, _ in res]
+    means = np.array([s["splits"]["mean"] for s in sm])
+    tr = trend(vals, means, decreasing=True)
+    verdict = {"claim": "smaller phi breaks more edges", "metric": "total splits",
+               "means": means.tolist(), "trend": tr,
+               "held": tr == "monotonic",
+               "phi0_vs_phi1_separated": separated(sm[0]["splits"], sm[-1]["splits"])}
+    run.record("fig10", "phi", vals, st, res, verdict)
+    run.draw("fig10_phi.png", f"Fig 10: phi sweep (psi = 0.25), {run.caption()}",
+             "phi", vals, st, res, "splits", "total splits", [("rms", "rms", 3)])
+    run.done("fig10")
+
+
+def fig11_psi(run):
+    vals = [0.0, 0.25, 0.5, 1.0]
+    st = [(f"psi = {v:g}", ["--psi", f"{v:g}", "--phi", "0.25"]) for v in vals]
+    res = run.sweep("fig11", st)
+    sm = [s for s, _ in res]
+    fr, rb, lr, spl = (np.array([s[m]["mean"] for s in sm])
+                       for m in ("rebreak_frac", "rebreaks", "late_rate", "splits"))
+    verdict = {"claim": "smaller psi makes broken edges break again more readily",
+               "metric": "rebreak_frac: share of the held auxiliary springs whose edge was "
+                         "made by an earlier split (second-generation breaks)",
+               "rebreak_frac_means": fr.tolist(), "rebreaks_means": rb.tolist(),
+               "late_rate_means": lr.tolist(), "splits_means": spl.tolist(),
+               "trend_rebreak_frac": trend(vals, fr), "trend_rebreaks": trend(vals, rb),
+               "trend_late_rate": trend(vals, lr), "trend_splits": trend(vals, spl),
+               "held": trend(vals, fr) == "monotonic",
+               "psi0_vs_psi1_separated": separated(sm[0]["rebreak_frac"],
+                                                   sm[-1]["rebreak_frac"])}
+    run.record("fig11", "psi", vals, st, res, verdict)
+    run.draw("fig11_psi.png", f"Fig 11: psi sweep (phi = 0.25), {run.caption()}",
+             "psi", vals, st, res, "rebreak_frac", "re-broken share of held springs",
              [("rebreaks", "re-breaks", 0), ("rebreak_frac", "re-brk %", 3),
               ("late_rate", "late/frm", 1)])
-        print(f"fig11 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
+    run.done("fig11")
 
-    if "fig12" in only:
-        vals = [0.1, 0.9]
-        st = [(f"epsilon = {v:g}", ["--epsilon", f"{v:g}"]) for v in vals]
-        res = sweep("fig12", st)
-        sm = [s for s, _ in res]
-        rs = [s["restores"]["mean"] for s in sm]
-        hd = [s["held"]["mean"] for s in sm]
-        cr = [s["crease"]["mean"] for s in sm]
-        verdict = {"claim": "small epsilon restores creases easily, large epsilon keeps them",
-                   "metric": "total restores; held auxiliary springs and crease at the end",
-                   "restores_means": rs, "held_means": hd, "crease_means": cr,
-                   "restores_higher_at_small_eps": rs[0] > rs[1],
-                   "restores_separated": separated(sm[0]["restores"], sm[1]["restores"]),
-                   "more_held_at_large_eps": hd[1] > hd[0],
-                   "more_crease_at_large_eps": cr[1] > cr[0],
-                   "held": rs[0] > rs[1] and hd[1] > hd[0]}
-        record("fig12", "epsilon", vals, st, res, verdict)
-        draw("fig12_epsilon.png",
-             f"Fig 12: epsilon (restoration threshold), grid {a.grid}, {a.frames} "
-             f"frames, seed 1 shown, mean ± s.d. over {len(seeds)} seeds",
-             "epsilon", vals, st, res,
-             "restores", "total restores", [("held", "held", 0)])
-        print(f"fig12 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
-    if "fig6" in only:
-        vals = [1.0, 2.0, 3.0, 4.0, 5.0]
-        st = [(f"varphi = {v:g}", ["--varphi", f"{v:g}"]) for v in vals]
-        res = sweep("fig6", st)
-        sm = [s for s, _ in res]
-        verdict = {"check": "[Eq 3] unit-square diagonal, unit masses, varphi = 4",
-                   "m_n": mn_formula(4, [1, 1, 1, 1]), "expected": 2 - math.sqrt(2),
-                   "m_n_by_varphi": {f"{v:g}": mn_formula(v, [1, 1, 1, 1]) for v in vals},
-                   "held": abs(mn_formula(4, [1, 1, 1, 1]) - (2 - math.sqrt(2))) < 1e-12,
-                   "mean_new_vertex_mass_from_sim": None,
-                   "note": "crumple's outputs carry no per-vertex mass, so the simulated mean "
-                           "new-vertex mass is not measured"}
-        record("fig6", "varphi", vals, st, res, verdict)
-        fig6(os.path.join(a.out, "fig6_varphi.png"), sm, vals)
-        print(f"fig6 done ({time.time() - t_start:.0f} s)", file=sys.stderr)
+def fig12_epsilon(run):
+    vals = [0.1, 0.9]
+    st = [(f"epsilon = {v:g}", ["--epsilon", f"{v:g}"]) for v in vals]
+    res = run.sweep("fig12", st)
+    sm = [s for s, _ in res]
+    rs, hd, cr = ([s[m]["mean"] for s in sm] for m in ("restores", "held", "crease"))
+    verdict = {"claim": "small epsilon restores creases easily, large epsilon keeps them",
+               "metric": "total restores; held auxiliary springs and crease at the end",
+               "restores_means": rs, "held_means": hd, "crease_means": cr,
+               "restores_higher_at_small_eps": rs[0] > rs[1],
+               "restores_separated": separated(sm[0]["restores"], sm[1]["restores"]),
+               "more_held_at_large_eps": hd[1] > hd[0],
+               "more_crease_at_large_eps": cr[1] > cr[0],
+               "held": rs[0] > rs[1] and hd[1] > hd[0]}
+    run.record("fig12", "epsilon", vals, st, res, verdict)
+    run.draw("fig12_epsilon.png",
+             f"Fig 12: epsilon (restoration threshold), grid {run.a.grid}, {run.a.frames} "
+             f"frames, seed 1 shown, mean ± s.d. over {len(run.seeds)} seeds",
+             "epsilon", vals, st, res, "restores", "total restores", [("held", "held", 0)])
+    run.done("fig12")
 
-    if "diag" in only:
-        # not paper claims: what the pictures depend on besides the model's parameters
-        dseeds = seeds[:3]
-        st = [(f"substeps {k}", [] if k == 1 else ["--substeps", str(k)]) for k in (1, 2, 4, 8)]
-        res = sweep("diag_substeps", st, dseeds)
-        sm = [s for s, _ in res]
-        record("diag_substeps", "substeps", [1, 2, 4, 8], st, res,
+
+def fig6_varphi(run):
+    vals = [1.0, 2.0, 3.0, 4.0, 5.0]
+    st = [(f"varphi = {v:g}", ["--varphi", f"{v:g}"]) for v in vals]
+    res = run.sweep("fig6", st)
+    verdict = {"check": "[Eq 3] unit-square diagonal, unit masses, varphi = 4",
+               "m_n": mn_formula(4, [1, 1, 1, 1]), "expected": 2 - math.sqrt(2),
+               "m_n_by_varphi": {f"{v:g}": mn_formula(v, [1, 1, 1, 1]) for v in vals},
+               "held": abs(mn_formula(4, [1, 1, 1, 1]) - (2 - math.sqrt(2))) < 1e-12,
+               "mean_new_vertex_mass_from_sim": None,
+               "note": "crumple's outputs carry no per-vertex mass, so the simulated mean "
+                       "new-vertex mass is not measured"}
+    run.record("fig6", "varphi", vals, st, res, verdict)
+    fig6(os.path.join(run.a.out, "fig6_varphi.png"), [s for s, _ in res], vals)
+    run.done("fig6")
+
+
+def diagnostics(run):
+    """Not paper claims: what the pictures depend on besides the model's parameters."""
+    dseeds = run.seeds[:3]
+    st = [(f"substeps {k}", [] if k == 1 else ["--substeps", str(k)]) for k in (1, 2, 4, 8)]
+    res = run.sweep("diag_substeps", st, dseeds)
+    sm = [s for s, _ in res]
+    run.record("diag_substeps", "substeps", [1, 2, 4, 8], st, res,
                {"question": "are the fracture counts converged in the time step?",
                 "splits_means": [s["splits"]["mean"] for s in sm],
                 "aspect_means": [s["aspect"]["mean"] for s in sm]})
-        draw("diag_substeps.png",
+    run.draw("diag_substeps.png",
              f"Diagnostic: time step (h = 1/60 s / substeps), model defaults, grid "
-             f"{a.grid}, {a.frames} frames, {len(dseeds)} seeds",
+             f"{run.a.grid}, {run.a.frames} frames, {len(dseeds)} seeds",
              "substeps", [1, 2, 4, 8], st, res, "splits", "total splits",
              [("aspect", "aspect", 2), ("wall_s", "wall s", 1)])
-        st = [("flat grid", [], 0.0), ("bump 0.01", [], 0.01), ("bump 0.03", [], 0.03),
-              ("bump 0.03, substeps 4", ["--substeps", "4"], 0.03)]
-        res = sweep("diag_flat", st, dseeds)
-        sm = [s for s, _ in res]
-        record("diag_flat", "initial out-of-plane perturbation", [l for l, *_ in st], st,
+    st = [("flat grid", [], 0.0), ("bump 0.01", [], 0.01), ("bump 0.03", [], 0.03),
+          ("bump 0.03, substeps 4", ["--substeps", "4"], 0.03)]
+    res = run.sweep("diag_flat", st, dseeds)
+    sm = [s for s, _ in res]
+    run.record("diag_flat", "initial out-of-plane perturbation", [l for l, *_ in st], st,
                res, {"question": "does a flat sheet stay a flat disk in the sphere?",
                      "aspect_means": [s["aspect"]["mean"] for s in sm],
                      "splits_means": [s["splits"]["mean"] for s in sm]})
-        draw("diag_flat.png",
+    run.draw("diag_flat.png",
              f"Diagnostic: flat sheet vs a smooth out-of-plane bump (max |z| in sheet "
-             f"widths), model defaults, grid {a.grid}, {len(dseeds)} seeds, side view",
+             f"widths), model defaults, grid {run.a.grid}, {len(dseeds)} seeds, side view",
              "", [0, 1, 2, 3], st, res, "aspect", "aspect (thickness / width)",
              [("aspect", "aspect", 2), ("rms", "rms", 3)], elev=10.0,
              xticklabels=["flat", "0.01", "0.03", "0.03\nsubst. 4"])
-        print(f"diagnostics done ({time.time() - t_start:.0f} s)", file=sys.stderr)
+    run.done("diagnostics")
 
-    if "woody" in only:
-        wargs = extra if a.woody_args is None else shlex.split(a.woody_args)
-        mesh = os.path.join(ROOT, "tests", "data", "woody.obj")
-        r, c = woody(a.bin, a.work, a.out, a.frames, mesh, wargs, 5, a.quick)
-        claims["woody"] = {"args": wargs, "ok": r.get("ok"), "frames_run": r.get("frames_run"),
+
+def woody_figure(run):
+    a = run.a
+    wargs = run.extra if a.woody_args is None else shlex.split(a.woody_args)
+    mesh = os.path.join(ROOT, "tests", "data", "woody.obj")
+    r, c = woody(a.bin, a.work, a.out, a.frames, mesh, wargs, 5, a.quick)
+    run.claims["woody"] = {"args": wargs, "ok": r.get("ok"), "frames_run": r.get("frames_run"),
                            "splits": r.get("splits"), "restores": r.get("restores"),
                            "vertices": r.get("vertices"), "crease": c["crease_norm"],
                            "rms": c["rms_radius_norm"], "error": r.get("error")}
-        print(f"woody done ({time.time() - t_start:.0f} s)", file=sys.stderr)
+    run.done("woody")
 
-    if "hero" in only:
-        hargs = shlex.split(a.hero_args)
-        r, o = hero(a.bin, a.work, a.out, a.quick and 32 or a.hero_grid, a.frames, hargs,
-                    a.hero_frame, a.hero_perturb)
-        claims["hero"] = {"args": hargs, "grid": 32 if a.quick else a.hero_grid,
-                          "perturb": a.hero_perturb, "ok": r.get("ok"),
-                          "frames_run": r.get("frames_run"), "shown": os.path.basename(o),
-                          "splits": r.get("splits"), "vertices": r.get("vertices"),
-                          "error": r.get("error")}
-        print(f"hero done ({time.time() - t_start:.0f} s)", file=sys.stderr)
 
-    claims["config"]["runtime_s"] = round(time.time() - t_start, 1)
-    path = os.path.join(a.out, "claims.json")
-    if os.path.exists(path) and only != {"fig10", "fig11", "fig12", "fig6", "diag", "woody", "hero"}:
+def hero_figure(run):
+    a = run.a
+    hargs = shlex.split(a.hero_args)
+    grid = 32 if a.quick else a.hero_grid
+    r, o = hero(a.bin, a.work, a.out, grid, a.frames, hargs, a.hero_frame, a.hero_perturb)
+    run.claims["hero"] = {"args": hargs, "grid": grid, "perturb": a.hero_perturb,
+                          "ok": r.get("ok"), "frames_run": r.get("frames_run"),
+                          "shown": os.path.basename(o), "splits": r.get("splits"),
+                          "vertices": r.get("vertices"), "error": r.get("error")}
+    run.done("hero")
+
+
+FIGURES = {"fig10": fig10_phi, "fig11": fig11_psi, "fig12": fig12_epsilon, "fig6": fig6_varphi,
+           "diag": diagnostics, "woody": woody_figure, "hero": hero_figure}
+
+
+def save_claims(run, only):
+    """claims.json (merged into the existing one when only some figures ran) and README.md."""
+    claims = run.claims
+    claims["config"]["runtime_s"] = round(time.time() - run.t_start, 1)
+    path = os.path.join(run.a.out, "claims.json")
+    if os.path.exists(path) and only != set(ALL_FIGURES):
         with open(path) as fh:
             old = json.load(fh)
         old.update(claims)
         claims = old
     with open(path, "w") as fh:
         json.dump(claims, fh, indent=1)
-    write_readme(os.path.join(a.out, "README.md"), claims)
-    print(f"figures: done in {time.time() - t_start:.0f} s -> {a.out}", file=sys.stderr)
+    write_readme(os.path.join(run.a.out, "README.md"), claims)
+
+
+def main(argv=None):
+    a = parse_args(argv)
+    only = set(a.only.split(","))
+    os.makedirs(a.out, exist_ok=True)
+    os.makedirs(a.work, exist_ok=True)
+    run = Run(a)
+    for name in ALL_FIGURES:
+        if name in only:
+            FIGURES[name](run)
+    save_claims(run, only)
+    print(f"figures: done in {time.time() - run.t_start:.0f} s -> {a.out}", file=sys.stderr)
 
 
 def git_describe():
@@ -724,161 +756,195 @@ def _row(s, keys):
                            (1 if k in ("crease", "late_rate", "wall_s") else 0))) for k in keys)
 
 
-def write_readme(path, c):
+def _table(c, name, pname, keys, heads):
+    """One sweep's settings as a markdown table: mean ± s.d. of each key, runs stopped early."""
+    t = [f"| {pname} | " + " | ".join(heads) + " | stopped early |",
+         "|---" * (len(heads) + 2) + "|"]
+    for st in c[name]["settings"]:
+        s = st["summary"]
+        val = st["value"] if isinstance(st["value"], str) else f"{st['value']:g}"
+        t.append(f"| {val} | {_row(s, keys)} | "
+                 f"{s['n'] - s['n_ok']}/{s['n']}"
+                 + (f" (frames {s['failed_at']})" if s['failed_at'] else "") + " |")
+    return t
+
+
+def _held(b):
+    return "**held**" if b else "**did not hold**"
+
+
+def _readme_header(c):
     cfg = c["config"]
-    L = ["# Figures: the paper's parameter claims, measured", "",
-         "Generated by `scripts/figures.sh` (which runs `scripts/figures.py`); every number "
-         "below comes from `claims.json` of the same run, so rerun rather than edit.", "",
-         "Reproduce: `scripts/figures.sh` (builds `build-fig`, then about 35 s on 2 cores; "
-         "`--quick` is a 2-seed, 120-frame pass written to `build-fig/figwork/quick-figures/`; "
-         "`--sim-args \"...\"` adds crumple options to every sweep run; "
-         "`/usr/bin/python3 scripts/figures.py --help` lists the rest).", "",
-         f"- binary: `{os.path.relpath(cfg['binary'], ROOT) if cfg['binary'].startswith(ROOT) else cfg['binary']}` "
-         f"at git {cfg['git']}, {cfg['date']}",
-         f"- scene: sphere crumple of a {cfg['grid']}x{cfg['grid']} grid"
-         + (f" perturbed out of plane by max |z| = {cfg['perturb']:g}" if cfg.get("perturb") else "")
-         + f", {cfg['frames']} frames "
-         f"of 1/60 s, seeds {cfg['seeds']}, extra options: `{' '.join(cfg['sim_args']) or '(none: defaults)'}`",
-         f"- runtime: {cfg.get('runtime_s', '?')} s",
-         "- numbers: mean ± s.d. over the seeds; a run that stopped early (unstable) is "
-         "excluded from the means when any run of the setting completed.",
-         "- crease = total length of edges with dihedral angle > 30° divided by sqrt(initial "
-         "area) (sheet-widths of crease; `scripts/crease.py` says why); rms = RMS vertex "
-         "distance from the centroid / sqrt(initial area) (flat unit square: 0.408).", ""]
+    return ["# Figures: the paper's parameter claims, measured", "",
+            "Generated by `scripts/figures.sh` (which runs `scripts/figures.py`); every number "
+            "below comes from `claims.json` of the same run, so rerun rather than edit.", "",
+            "Reproduce: `scripts/figures.sh` (builds `build-fig`, then about 35 s on 2 cores; "
+            "`--quick` is a 2-seed, 120-frame pass written to `build-fig/figwork/quick-figures/`; "
+            "`--sim-args \"...\"` adds crumple options to every sweep run; "
+            "`/usr/bin/python3 scripts/figures.py --help` lists the rest).", "",
+            f"- binary: `{os.path.relpath(cfg['binary'], ROOT) if cfg['binary'].startswith(ROOT) else cfg['binary']}` "
+            f"at git {cfg['git']}, {cfg['date']}",
+            f"- scene: sphere crumple of a {cfg['grid']}x{cfg['grid']} grid"
+            + (f" perturbed out of plane by max |z| = {cfg['perturb']:g}" if cfg.get("perturb") else "")
+            + f", {cfg['frames']} frames "
+            f"of 1/60 s, seeds {cfg['seeds']}, extra options: `{' '.join(cfg['sim_args']) or '(none: defaults)'}`",
+            f"- runtime: {cfg.get('runtime_s', '?')} s",
+            "- numbers: mean ± s.d. over the seeds; a run that stopped early (unstable) is "
+            "excluded from the means when any run of the setting completed.",
+            "- crease = total length of edges with dihedral angle > 30° divided by sqrt(initial "
+            "area) (sheet-widths of crease; `scripts/crease.py` says why); rms = RMS vertex "
+            "distance from the centroid / sqrt(initial area) (flat unit square: 0.408).", ""]
 
-    def table(name, pname, keys, heads):
-        t = [f"| {pname} | " + " | ".join(heads) + " | stopped early |",
-             "|---" * (len(heads) + 2) + "|"]
-        for st in c[name]["settings"]:
-            s = st["summary"]
-            val = st["value"] if isinstance(st["value"], str) else f"{st['value']:g}"
-            t.append(f"| {val} | {_row(s, keys)} | "
-                     f"{s['n'] - s['n_ok']}/{s['n']}"
-                     + (f" (frames {s['failed_at']})" if s['failed_at'] else "") + " |")
-        return t
 
-    def yes(b):
-        return "**held**" if b else "**did not hold**"
+def _readme_fig10(c):
+    v = c["fig10"]["verdict"]
+    return (["## Fig 10 — smaller phi breaks more (`fig10_phi.png`, psi = 0.25)", ""]
+            + _table(c, "fig10", "phi", ["splits", "restores", "vertices", "crease", "rms", "aspect"],
+                     ["splits", "restores", "vertices", "crease", "rms", "aspect"])
+            + ["", f"Verdict: {_held(v['held'])}. Total splits by phi: "
+               + ", ".join(f"{m:.0f}" for m in v["means"])
+               + f" (trend: {v['trend']}; phi = 0 vs 1 seed ranges "
+               + ("disjoint" if v["phi0_vs_phi1_separated"] else "overlap") + ").", ""])
 
-    if "fig10" in c:
-        v = c["fig10"]["verdict"]
-        L += ["## Fig 10 — smaller phi breaks more (`fig10_phi.png`, psi = 0.25)", ""]
-        L += table("fig10", "phi", ["splits", "restores", "vertices", "crease", "rms", "aspect"],
-                   ["splits", "restores", "vertices", "crease", "rms", "aspect"])
-        L += ["", f"Verdict: {yes(v['held'])}. Total splits by phi: "
-              + ", ".join(f"{m:.0f}" for m in v["means"])
-              + f" (trend: {v['trend']}; phi = 0 vs 1 seed ranges "
-              + ("disjoint" if v["phi0_vs_phi1_separated"] else "overlap") + ").", ""]
-    if "fig11" in c:
-        v = c["fig11"]["verdict"]
-        L += ["## Fig 11 — smaller psi makes broken edges break again (`fig11_psi.png`, "
-              "phi = 0.25)", "",
-              "Measured: *re-breaks*, the held auxiliary springs (broken edges, `l` lines of the "
-              "final OBJ) whose edge was itself made by an earlier split (it has an endpoint "
-              "created by a split: index >= the initial vertex count), and their share of all "
-              "held springs (re-brk %); also *late/frm*, splits per frame over the last third "
-              "of the run (after the first crumple), and total splits.", ""]
-        L += table("fig11", "psi", ["splits", "restores", "rebreaks", "rebreak_frac",
+
+def _readme_fig11(c):
+    v = c["fig11"]["verdict"]
+    L = ["## Fig 11 — smaller psi makes broken edges break again (`fig11_psi.png`, "
+         "phi = 0.25)", "",
+         "Measured: *re-breaks*, the held auxiliary springs (broken edges, `l` lines of the "
+         "final OBJ) whose edge was itself made by an earlier split (it has an endpoint "
+         "created by a split: index >= the initial vertex count), and their share of all "
+         "held springs (re-brk %); also *late/frm*, splits per frame over the last third "
+         "of the run (after the first crumple), and total splits.", ""]
+    L += _table(c, "fig11", "psi", ["splits", "restores", "rebreaks", "rebreak_frac",
                                     "late_rate", "crease"],
-                   ["splits", "restores", "re-breaks", "re-brk share", "late/frame", "crease"])
-        L += ["", f"Verdict: {yes(v['held'])} on the re-broken share (trend "
-              f"{v['trend_rebreak_frac']}: "
-              + ", ".join(f"{m:.3f}" for m in v["rebreak_frac_means"])
-              + "; psi = 0 vs 1 seed ranges "
-              + ("disjoint" if v["psi0_vs_psi1_separated"] else "overlap")
-              + f"). Re-break count trend {v['trend_rebreaks']}, late split rate trend "
-              f"{v['trend_late_rate']}, total splits trend {v['trend_splits']} "
-              "('monotonic' = decreasing as psi grows, as the claim predicts; 'ends' = "
-              "psi = 0 above psi = 1 but not monotonic).", ""]
-    if "fig12" in c:
-        v = c["fig12"]["verdict"]
-        L += ["## Fig 12 — small epsilon restores easily (`fig12_epsilon.png`)", ""]
-        L += table("fig12", "epsilon", ["splits", "restores", "held", "vertices", "crease"],
-                   ["splits", "restores", "held springs", "vertices", "crease"])
-        L += ["", f"Verdict: {yes(v['held'])}. Restores at epsilon 0.1 vs 0.9: "
-              f"{v['restores_means'][0]:.0f} vs {v['restores_means'][1]:.0f} ("
-              + ("seed ranges disjoint" if v["restores_separated"] else "seed ranges overlap")
-              + f"); broken edges still held at the end: {v['held_means'][0]:.0f} vs "
-              f"{v['held_means'][1]:.0f}; crease {v['crease_means'][0]:.1f} vs "
-              f"{v['crease_means'][1]:.1f}.", ""]
-    if "fig6" in c:
-        v = c["fig6"]["verdict"]
-        L += ["## Fig 6 — mass of a new vertex (`fig6_varphi.png`)", "",
-              "Computed from [Eq 3] for the diagonal of a unit square of four unit masses "
-              "(all delta = 1/4): " + ", ".join(f"varphi {k}: {m:.4f}"
-                                                 for k, m in v["m_n_by_varphi"].items())
-              + f". varphi = 4 gives {v['m_n']:.5f} = 2 - sqrt 2: {yes(v['held'])}. "
-              "The simulated mean new-vertex mass is not reported: crumple's outputs carry "
-              "no per-vertex mass. The sweep per varphi:", ""]
-        L += table("fig6", "varphi", ["splits", "restores", "vertices", "crease"],
-                   ["splits", "restores", "vertices", "crease"])
-        L += [""]
-    if "diag_substeps" in c and "diag_flat" in c:
-        L += ["## Diagnostics, not paper claims (`diag_substeps.png`, `diag_flat.png`)", "",
-              "aspect = sqrt(smallest / largest eigenvalue of the vertex covariance): 0 for a "
-              "flat sheet, ~0.1-0.3 for a flat disk, ~0.6-1 for a ball.", "",
-              "Time step (model defaults):", ""]
-        L += table("diag_substeps", "substeps", ["splits", "restores", "vertices", "crease",
+                ["splits", "restores", "re-breaks", "re-brk share", "late/frame", "crease"])
+    L += ["", f"Verdict: {_held(v['held'])} on the re-broken share (trend "
+          f"{v['trend_rebreak_frac']}: "
+          + ", ".join(f"{m:.3f}" for m in v["rebreak_frac_means"])
+          + "; psi = 0 vs 1 seed ranges "
+          + ("disjoint" if v["psi0_vs_psi1_separated"] else "overlap")
+          + f"). Re-break count trend {v['trend_rebreaks']}, late split rate trend "
+          f"{v['trend_late_rate']}, total splits trend {v['trend_splits']} "
+          "('monotonic' = decreasing as psi grows, as the claim predicts; 'ends' = "
+          "psi = 0 above psi = 1 but not monotonic).", ""]
+    return L
+
+
+def _readme_fig12(c):
+    v = c["fig12"]["verdict"]
+    return (["## Fig 12 — small epsilon restores easily (`fig12_epsilon.png`)", ""]
+            + _table(c, "fig12", "epsilon", ["splits", "restores", "held", "vertices", "crease"],
+                     ["splits", "restores", "held springs", "vertices", "crease"])
+            + ["", f"Verdict: {_held(v['held'])}. Restores at epsilon 0.1 vs 0.9: "
+               f"{v['restores_means'][0]:.0f} vs {v['restores_means'][1]:.0f} ("
+               + ("seed ranges disjoint" if v["restores_separated"] else "seed ranges overlap")
+               + f"); broken edges still held at the end: {v['held_means'][0]:.0f} vs "
+               f"{v['held_means'][1]:.0f}; crease {v['crease_means'][0]:.1f} vs "
+               f"{v['crease_means'][1]:.1f}.", ""])
+
+
+def _readme_fig6(c):
+    v = c["fig6"]["verdict"]
+    return (["## Fig 6 — mass of a new vertex (`fig6_varphi.png`)", "",
+             "Computed from [Eq 3] for the diagonal of a unit square of four unit masses "
+             "(all delta = 1/4): " + ", ".join(f"varphi {k}: {m:.4f}"
+                                                for k, m in v["m_n_by_varphi"].items())
+             + f". varphi = 4 gives {v['m_n']:.5f} = 2 - sqrt 2: {_held(v['held'])}. "
+             "The simulated mean new-vertex mass is not reported: crumple's outputs carry "
+             "no per-vertex mass. The sweep per varphi:", ""]
+            + _table(c, "fig6", "varphi", ["splits", "restores", "vertices", "crease"],
+                     ["splits", "restores", "vertices", "crease"])
+            + [""])
+
+
+def _readme_diagnostics(c):
+    L = ["## Diagnostics, not paper claims (`diag_substeps.png`, `diag_flat.png`)", "",
+         "aspect = sqrt(smallest / largest eigenvalue of the vertex covariance): 0 for a "
+         "flat sheet, ~0.1-0.3 for a flat disk, ~0.6-1 for a ball.", "",
+         "Time step (model defaults):", ""]
+    L += _table(c, "diag_substeps", "substeps", ["splits", "restores", "vertices", "crease",
                                                  "aspect", "wall_s"],
-                   ["splits", "restores", "vertices", "crease", "aspect", "wall s"])
-        sp = c["diag_substeps"]["verdict"]["splits_means"]
-        L += ["", f"Total splits fall from {sp[0]:.0f} (substeps 1) to {sp[-1]:.0f} "
-              f"(substeps 8), {sp[-1] / sp[0]:.2f}x: the fracture counts are "
-              + ("not converged in the time step, although P is converted per step with "
-                 "h / h_ref (MODEL.md section 4); the sweeps above use substeps 1, so their "
-                 "counts belong to h = 1/60 s." if sp[-1] < 0.8 * sp[0] else
-                 "roughly converged in the time step.") , "",
-              "Flat sheet vs a smooth bump (writes a perturbed grid OBJ and runs --mesh):", ""]
-        L += table("diag_flat", "sheet", ["splits", "restores", "vertices", "crease",
-                                              "aspect", "rms"],
-                   ["splits", "restores", "vertices", "crease", "aspect", "rms"])
-        asp = c["diag_flat"]["verdict"]["aspect_means"]
-        L += ["", "bump A: max |z| = A sheet widths (a sum of the 9 lowest sine modes, "
-              "`perturbed_grid` in figures.py). Final aspect "
-              + ", ".join(f"{x:.2f}" for x in asp) + ". "
-              + ("A perfectly flat sheet ends as a flat disk (the sphere squeezes it in plane "
-                 "and fracture absorbs the compression at the scale of single edges; nothing "
-                 "breaks the symmetry at the sheet's scale); a small bump lets it buckle out "
-                 "of plane into a ball." if asp[0] < 0.5 * max(asp[1:]) else
-                 "The flat sheet and the bumped ones end with similar shapes."), ""]
+                ["splits", "restores", "vertices", "crease", "aspect", "wall s"])
+    sp = c["diag_substeps"]["verdict"]["splits_means"]
+    L += ["", f"Total splits fall from {sp[0]:.0f} (substeps 1) to {sp[-1]:.0f} "
+          f"(substeps 8), {sp[-1] / sp[0]:.2f}x: the fracture counts are "
+          + ("not converged in the time step, although P is converted per step with "
+             "h / h_ref (MODEL.md section 4); the sweeps above use substeps 1, so their "
+             "counts belong to h = 1/60 s." if sp[-1] < 0.8 * sp[0] else
+             "roughly converged in the time step.") , "",
+          "Flat sheet vs a smooth bump (writes a perturbed grid OBJ and runs --mesh):", ""]
+    L += _table(c, "diag_flat", "sheet", ["splits", "restores", "vertices", "crease",
+                                          "aspect", "rms"],
+                ["splits", "restores", "vertices", "crease", "aspect", "rms"])
+    asp = c["diag_flat"]["verdict"]["aspect_means"]
+    L += ["", "bump A: max |z| = A sheet widths (a sum of the 9 lowest sine modes, "
+          "`perturbed_grid` in figures.py). Final aspect "
+          + ", ".join(f"{x:.2f}" for x in asp) + ". "
+          + ("A perfectly flat sheet ends as a flat disk (the sphere squeezes it in plane "
+             "and fracture absorbs the compression at the scale of single edges; nothing "
+             "breaks the symmetry at the sheet's scale); a small bump lets it buckle out "
+             "of plane into a ball." if asp[0] < 0.5 * max(asp[1:]) else
+             "The flat sheet and the bumped ones end with similar shapes."), ""]
+    return L
+
+
+def _readme_caveats(c):
+    src = c["diag_substeps"] if "diag_substeps" in c else c["fig10"]
+    s0 = src["settings"][0]["summary"]
+    dih = s0.get("mean_dihedral", {}).get("mean", float("nan"))
+    return ["## Caveats", "",
+            f"- The crease measure counts a rough surface, not only distinct crease lines: at "
+            f"the default time step the mean dihedral angle over all interior edges is "
+            f"{dih:.0f}° (first row of "
+            + ("the time-step diagnostic" if "diag_substeps" in c else "Fig 10")
+            + "), so a large share of all edges exceed 30°. Compare settings with it, do not "
+            "read it as a count of folds.",
+            "- The psi measure is a snapshot of the final OBJ: breaks that were restored left "
+            "no spring and are not counted; the effect it shows is modest (see the numbers).",
+            "- All sweeps start from a perfectly flat sheet, which the sphere squeezes into a "
+            "flat disk (see the aspect column and the diagnostics), not a three-dimensional wad "
+            "like real crumpled paper. The claims concern counts, which the pictures only "
+            "illustrate.", ""]
+
+
+def _readme_woody(c):
+    w = c["woody"]
+    return ["## Woody (`woody_strip.png`, `woody.gif`)", "",
+            f"tests/data/woody.obj crumpled in the sphere scene, seed 1, options "
+            f"`{' '.join(w['args']) or '(defaults)'}`: "
+            + ("completed" if w["ok"] else f"UNSTABLE at frame {w['frames_run']}")
+            + f"; {w['splits']} splits, {w['restores']} restores, {w['vertices']} vertices, "
+            f"crease {w['crease']:.1f} sheet-widths, rms {w['rms']:.3f}.", ""]
+
+
+def _readme_hero(c):
+    h = c["hero"]
+    return ["## Hero (`hero.png`)", "",
+            f"{h['grid']}x{h['grid']} grid"
+            + (f" with a smooth out-of-plane perturbation of max |z| = {h['perturb']:g} "
+               "sheet widths (see Diagnostics: a perfectly flat sheet crumples into a flat disk)"
+               if h.get("perturb") else "")
+            + f", seed 1, options `{' '.join(h['args']) or '(defaults)'}`, "
+            f"showing {h['shown']}; {h['splits']} splits, {h['vertices']} vertices"
+            + ("" if h["ok"] else f"; UNSTABLE at frame {h['frames_run']}") + ".", ""]
+
+
+def write_readme(path, c):
+    """README.md of a run, every number from its claims c; a section per figure that ran."""
+    L = _readme_header(c)
+    for present, section in ((("fig10",), _readme_fig10), (("fig11",), _readme_fig11),
+                             (("fig12",), _readme_fig12), (("fig6",), _readme_fig6),
+                             (("diag_substeps", "diag_flat"), _readme_diagnostics)):
+        if all(k in c for k in present):
+            L += section(c)
     if "fig10" in c or "diag_substeps" in c:
-        src = c["diag_substeps"] if "diag_substeps" in c else c["fig10"]
-        s0 = src["settings"][0]["summary"]
-        dih = s0.get("mean_dihedral", {}).get("mean", float("nan"))
-        L += ["## Caveats", "",
-              f"- The crease measure counts a rough surface, not only distinct crease lines: at "
-              f"the default time step the mean dihedral angle over all interior edges is "
-              f"{dih:.0f}° (first row of "
-              + ("the time-step diagnostic" if "diag_substeps" in c else "Fig 10")
-              + "), so a large share of all edges exceed 30°. Compare settings with it, do not "
-              "read it as a count of folds.",
-              "- The psi measure is a snapshot of the final OBJ: breaks that were restored left "
-              "no spring and are not counted; the effect it shows is modest (see the numbers).",
-              "- All sweeps start from a perfectly flat sheet, which the sphere squeezes into a "
-              "flat disk (see the aspect column and the diagnostics), not a three-dimensional wad "
-              "like real crumpled paper. The claims concern counts, which the pictures only "
-              "illustrate.", ""]
-    if "woody" in c:
-        w = c["woody"]
-        L += ["## Woody (`woody_strip.png`, `woody.gif`)", "",
-              f"tests/data/woody.obj crumpled in the sphere scene, seed 1, options "
-              f"`{' '.join(w['args']) or '(defaults)'}`: "
-              + ("completed" if w["ok"] else f"UNSTABLE at frame {w['frames_run']}")
-              + f"; {w['splits']} splits, {w['restores']} restores, {w['vertices']} vertices, "
-              f"crease {w['crease']:.1f} sheet-widths, rms {w['rms']:.3f}.", ""]
-    if "hero" in c:
-        h = c["hero"]
-        L += ["## Hero (`hero.png`)", "",
-              f"{h['grid']}x{h['grid']} grid"
-              + (f" with a smooth out-of-plane perturbation of max |z| = {h['perturb']:g} "
-                 "sheet widths (see Diagnostics: a perfectly flat sheet crumples into a flat disk)"
-                 if h.get("perturb") else "")
-              + f", seed 1, options `{' '.join(h['args']) or '(defaults)'}`, "
-              f"showing {h['shown']}; {h['splits']} splits, {h['vertices']} vertices"
-              + ("" if h["ok"] else f"; UNSTABLE at frame {h['frames_run']}") + ".", ""]
+        L += _readme_caveats(c)
+    for key, section in (("woody", _readme_woody), ("hero", _readme_hero)):
+        if key in c:
+            L += section(c)
     with open(path, "w") as fh:
         fh.write("\n".join(L) + "\n")
-
 
 if __name__ == "__main__":
     main()

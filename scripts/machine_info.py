@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The machine a benchmark runs on: a folder tag and a description (used by scripts/bench.sh).
 
-  machine_info.py --tag     prints e.g. "amd-epyc_avx512" (lscpu model name + widest SIMD set)
+  machine_info.py --tag     prints e.g. "amd-epyc-zen5_avx512" (lscpu model name, its
+                            microarchitecture when the name gives no model number, as a
+                            virtual machine's "AMD EPYC" does, and the widest SIMD set)
   machine_info.py --json    prints a JSON object: model, tag, cores, threads_per_core, simd,
                             flags (a summary), compiler, kernel
 """
@@ -41,6 +43,40 @@ def cpu_flags(info):
     return set(flags.split())
 
 
+def cpu_id():
+    """(vendor, family, model) from /proc/cpuinfo's first processor; empty and -1 when unread."""
+    found = {}
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                key, sep, value = line.partition(":")
+                if not sep:
+                    if found:
+                        break  # the first processor's block has ended
+                    continue
+                found.setdefault(key.strip(), value.strip())
+    except OSError:
+        pass
+    number = lambda k: int(found[k]) if found.get(k, "").isdigit() else -1  # noqa: E731
+    return found.get("vendor_id", ""), number("cpu family"), number("model")
+
+
+def microarchitecture(vendor, family, model):
+    """AMD's core generation from family and model ("zen4"), or "" where not known. Virtual
+    machines often name every AMD CPU "AMD EPYC": two VM kinds of different generations would
+    otherwise share a results folder (AMD's family 19h covers Zen 3 and Zen 4 by model range)."""
+    if vendor != "AuthenticAMD":
+        return ""
+    if family == 0x17:
+        return "zen2" if model >= 0x30 else "zen1"
+    if family == 0x19:
+        zen4 = 0x10 <= model <= 0x1F or 0x60 <= model <= 0x7F or 0xA0 <= model <= 0xAF
+        return "zen4" if zen4 else "zen3"
+    if family == 0x1A:
+        return "zen5"
+    return ""
+
+
 def simd_level(flags):
     if "avx512f" in flags:
         return "avx512"
@@ -68,9 +104,14 @@ def slug(model):
     return s or "unknown"
 
 
-def tag(info=None):
+def tag(info=None, cpu=None):
+    """The results folder's name; cpu is cpu_id()'s (vendor, family, model)."""
     info = lscpu() if info is None else info
-    return slug(model_name(info)) + "_" + simd_level(cpu_flags(info))
+    model = model_name(info)
+    arch = microarchitecture(*(cpu_id() if cpu is None else cpu))
+    # A name with a model number ("AMD EPYC 9654") tells the machine apart already.
+    suffix = f"-{arch}" if arch and not re.search(r"\d", model) else ""
+    return slug(model) + suffix + "_" + simd_level(cpu_flags(info))
 
 
 def compiler():
@@ -85,11 +126,15 @@ def compiler():
 def describe():
     info = lscpu()
     flags = cpu_flags(info)
+    vendor, family, model = cpu_id()
     wanted = ["avx512f", "avx512dq", "avx512bw", "avx512vl", "avx512_vnni", "avx2", "fma", "avx",
               "sse4_2", "bmi2"]
     return {
         "model": model_name(info),
-        "tag": tag(info),
+        "tag": tag(info, (vendor, family, model)),
+        "family": family,
+        "model_number": model,
+        "microarchitecture": microarchitecture(vendor, family, model),
         "cpus": os.cpu_count(),
         "cores_per_socket": info.get("Core(s) per socket", ""),
         "threads_per_core": info.get("Thread(s) per core", ""),

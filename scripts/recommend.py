@@ -83,7 +83,7 @@ def crumple_main(a):
     return 0
 
 
-def main(argv=None):
+def parse_args(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scene", required=True, help="hang or free (the scenes of the trajectory study), or crumple")
     ap.add_argument("--grid", type=int, default=128, help="crumple: grid size N of the case")
@@ -96,20 +96,22 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if not (a.kappa > 0 and a.error > 0):
         ap.error("--kappa and --error must be positive")
-    if a.scene == "crumple":
-        return crumple_main(a)
+    return a
+
+
+def trajectory_case(a):
+    """The saved study and its case nearest a's scene and kappa, with notes on how near: or an
+    error message when the study cannot be read or did not study the scene."""
     a.table = a.table or os.path.join(ROOT, "results", "accuracy", "sweep.json")
     try:
         with open(a.table) as f:
             data = json.load(f)
     except OSError as e:
-        print(f"recommend: cannot read {a.table}: {e.strerror} (run scripts/accuracy.sh first)", file=sys.stderr)
-        return 2
+        return f"cannot read {a.table}: {e.strerror} (run scripts/accuracy.sh first)"
     cases = [c for c in data["cases"] if c["scene"] == a.scene]
     if not cases:
         scenes = sorted({c["scene"] for c in data["cases"]})
-        print(f"recommend: scene '{a.scene}' was not studied; studied: {', '.join(scenes)}", file=sys.stderr)
-        return 2
+        return f"scene '{a.scene}' was not studied; studied: {', '.join(scenes)}"
     case = min(cases, key=lambda c: abs(math.log10(c["kappa"]) - math.log10(a.kappa)))
     notes = []
     if abs(math.log10(case["kappa"]) - math.log10(a.kappa)) > 1e-9:
@@ -120,44 +122,39 @@ def main(argv=None):
     if ref_unc and a.error < 3 * ref_unc:
         notes.append(f"the budget is within 3x of the reference's own uncertainty ({ref_unc:.2g}): "
                      "errors that small are not resolved by this study")
-    ok = [r for r in case["rows"] if not r["failed"] and r.get("error") is not None
-          and r.get("ms_per_s") and r["error"] <= a.error]
-    ok.sort(key=lambda r: r["ms_per_s"])
-    methods = data["methods"]
+    return data, case, notes
 
-    def describe(r):
-        m = methods[r["method"]]
-        n = r["steps_per_s"]
-        opts = m["args"] + ["--backend", m["backend"]] + (["--threads", str(m["threads"])] if m["backend"] == "fast" else [])
-        # h = 1/n: n/60 substeps of the default 1/60 s frame when 60 divides n, else frames as
-        # close to 1/60 s as the step allows (then --frames counts those frames)
-        if n % 60 == 0:
-            step = ["--substeps", str(n // 60)]
-        else:
-            f = frames_for(n)
-            step = ["--frame-dt", f"{f['frame_dt']:.9g}", "--substeps", str(f["substeps"])]
-        return {"method": r["method"], "text": m["text"], "step": f"1/{n}", "h": 1.0 / n,
-                "ms_per_simulated_s": r["ms_per_s"], "error": r["error"],
-                "crumple_options": " ".join(str(o) for o in opts + step)}
 
-    out = {"scene": a.scene, "kappa_asked": a.kappa, "kappa_used": case["kappa"], "error_budget": a.error,
-           "notes": notes, "recommendation": describe(ok[0]) if ok else None,
-           "alternatives": [describe(r) for r in ok[1:1 + a.alternatives]],
-           "source": os.path.relpath(a.table, ROOT), "timing_note": data.get("timing_note")}
-    if a.json:
-        print(json.dumps(out, indent=1))
-        return 0 if ok else 1
+def describe(r, methods):
+    """A study row as a recommendation: the method, its step and the crumple options for it."""
+    m = methods[r["method"]]
+    n = r["steps_per_s"]
+    opts = m["args"] + ["--backend", m["backend"]] + (["--threads", str(m["threads"])] if m["backend"] == "fast" else [])
+    # h = 1/n: n/60 substeps of the default 1/60 s frame when 60 divides n, else frames as
+    # close to 1/60 s as the step allows (then --frames counts those frames)
+    if n % 60 == 0:
+        step = ["--substeps", str(n // 60)]
+    else:
+        f = frames_for(n)
+        step = ["--frame-dt", f"{f['frame_dt']:.9g}", "--substeps", str(f["substeps"])]
+    return {"method": r["method"], "text": m["text"], "step": f"1/{n}", "h": 1.0 / n,
+            "ms_per_simulated_s": r["ms_per_s"], "error": r["error"],
+            "crumple_options": " ".join(str(o) for o in opts + step)}
+
+
+def print_trajectory(a, case, out, data):
+    """The text answer for a trajectory scene; returns the exit status."""
     print(f"scene {a.scene}, kappa {case['kappa']:g}, error budget {a.error:g} (after 1 s, fraction of the sheet diagonal)")
-    for n in notes:
+    for n in out["notes"]:
         print(f"  note: {n}")
-    if not ok:
+    r = out["recommendation"]
+    if not r:
         best = min((r for r in case["rows"] if not r["failed"] and r.get("error") is not None),
                    key=lambda r: r["error"], default=None)
         print("  none of the tested methods and steps (h >= 1/1000 s) meets this budget")
         if best:
             print(f"  the most accurate tested: {best['method']} at h = 1/{best['steps_per_s']}, error {best['error']:.2g}")
         return 1
-    r = describe(ok[0])
     print(f"  cheapest: {r['method']} ({r['text']}) at h = {r['step']} s")
     print(f"    error {r['error']:.2g}, cost {r['ms_per_simulated_s']:.3g} ms per simulated second (16 x 16 grid)")
     print(f"    crumple run {r['crumple_options']}")
@@ -168,6 +165,28 @@ def main(argv=None):
         print(f"  ({data['timing_note']})")
     return 0
 
+
+def main(argv=None):
+    a = parse_args(argv)
+    if a.scene == "crumple":
+        return crumple_main(a)
+    found = trajectory_case(a)
+    if isinstance(found, str):
+        print(f"recommend: {found}", file=sys.stderr)
+        return 2
+    data, case, notes = found
+    ok = [r for r in case["rows"] if not r["failed"] and r.get("error") is not None
+          and r.get("ms_per_s") and r["error"] <= a.error]
+    ok.sort(key=lambda r: r["ms_per_s"])
+    methods = data["methods"]
+    out = {"scene": a.scene, "kappa_asked": a.kappa, "kappa_used": case["kappa"], "error_budget": a.error,
+           "notes": notes, "recommendation": describe(ok[0], methods) if ok else None,
+           "alternatives": [describe(r, methods) for r in ok[1:1 + a.alternatives]],
+           "source": os.path.relpath(a.table, ROOT), "timing_note": data.get("timing_note")}
+    if a.json:
+        print(json.dumps(out, indent=1))
+        return 0 if ok else 1
+    return print_trajectory(a, case, out, data)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -138,36 +138,14 @@ def shade(normals, eye, light, ambient=0.45, diffuse=0.6, front=FRONT, back=BACK
     return np.concatenate([rgb, np.ones((len(rgb), 1))], axis=1)
 
 
-def render_mesh(V, F, L=None, ax=None, elev=35.0, azim=-60.0, crease_deg=30.0,
-                creases=True, aux=False, crease_width=0.5, seam_width=0.25, light=None,
-                center=None, radius=None, fill=0.92, bias=0.35):
-    """Draw the mesh into a 3D axes `ax` (made if None). Returns ax.
-
-    center, radius: fix the view (data units; e.g. the same for every panel of a row);
-    by default the object fills `fill` of the axes.
-    """
-    if ax is None:
-        fig = plt.figure(figsize=(6, 6))
-        ax = fig.add_subplot(projection="3d", proj_type="ortho")
-    V = np.asarray(V, dtype=float)
-    F = np.asarray(F, dtype=np.int64)
-    eye, up, right = camera_frame(elev, azim)
-    if light is None:
-        light = 0.75 * eye + 0.55 * up - 0.35 * right
-    light = np.asarray(light, float) / np.linalg.norm(light)
-    normals, _ = face_normals(V, F)
-    colors = shade(normals, eye, light)
-
-    polys = [V[F]]        # (m,3,3)
-    fcol = [colors]
-    ecol = [colors]       # seams painted in the face colour hide antialiasing cracks
-    segs_all = []
-    seg_col = []
+def _line_segments(V, F, L, normals, creases, aux, crease_deg):
+    """The lines drawn over the faces, with their RGBA colours: creases (darker for sharper
+    ones) and, when asked, the auxiliary springs L. Two lists, one entry per kind present."""
+    segs_all, seg_col = [], []
     if creases and len(F):
         E, ang = dihedral_angles(V, F, normals)
         sel = ang > crease_deg
         if np.any(sel):
-            # darker for sharper creases
             t = np.clip((ang[sel] - crease_deg) / 60.0, 0.0, 1.0)
             alpha = 0.45 + 0.5 * t
             c = np.concatenate([np.tile(CREASE, (sel.sum(), 1)), alpha[:, None]], axis=1)
@@ -177,31 +155,14 @@ def render_mesh(V, F, L=None, ax=None, elev=35.0, azim=-60.0, crease_deg=30.0,
         segs_all.append(V[np.asarray(L)])
         seg_col.append(np.concatenate([np.tile(AUX, (len(L), 1)),
                                        np.full((len(L), 1), 0.8)], axis=1))
-    verts = list(polys[0])
-    if segs_all:
-        segs = np.concatenate(segs_all)
-        # depth bias towards the camera, per segment: a fraction of its own length (enough
-        # to come after the two triangles it bounds, small enough to stay behind sheet
-        # layers lying in front of it)
-        seglen = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1)
-        segs = segs + (bias * seglen)[:, None, None] * eye[None, None, :]
-        sc = np.concatenate(seg_col)
-        verts += list(segs)
-        fcol.append(np.zeros((len(segs), 4)))
-        ecol.append(sc)
-    fc = np.concatenate(fcol)
-    ec = np.concatenate(ecol)
-    lw = seam_width if not segs_all else crease_width
-    # one linewidth per collection (mplot3d does not reorder per-item widths): seams are
-    # drawn at the same width but in the face colour, so they are invisible
-    coll = Poly3DCollection(verts, facecolors=fc, edgecolors=ec, linewidths=lw,
-                            zsort="average", antialiased=True)
-    ax.add_collection3d(coll)
+    return segs_all, seg_col
 
-    # Equal scaling, object filling the view: limits are a cube around `center` (default:
-    # the middle of the object's on-screen extent); `radius` is the on-screen half-size in
-    # data units to fit (default: the object's). mplot3d draws a screen-plane disk of
-    # radius 1 with limits +-1 at 0.57 of the axes' width in ortho mode (measured, any view).
+
+def _fit_view(ax, V, elev, azim, up, right, center, radius, fill):
+    """Equal scaling, object filling the view: limits are a cube around `center` (default:
+    the middle of the object's on-screen extent); `radius` is the on-screen half-size in
+    data units to fit (default: the object's). mplot3d draws a screen-plane disk of
+    radius 1 with limits +-1 at 0.57 of the axes' width in ortho mode (measured, any view)."""
     if len(V):
         c0 = 0.5 * (V.min(axis=0) + V.max(axis=0)) if center is None else np.asarray(center, float)
         P = V - c0
@@ -221,6 +182,48 @@ def render_mesh(V, F, L=None, ax=None, elev=35.0, azim=-60.0, crease_deg=30.0,
     ax.set_box_aspect((1, 1, 1))
     ax.view_init(elev=elev, azim=azim)
     ax.set_axis_off()
+
+
+def render_mesh(V, F, L=None, ax=None, elev=35.0, azim=-60.0, crease_deg=30.0,
+                creases=True, aux=False, crease_width=0.5, seam_width=0.25, light=None,
+                center=None, radius=None, fill=0.92, bias=0.35):
+    """Draw the mesh into a 3D axes `ax` (made if None). Returns ax.
+
+    center, radius: fix the view (data units; e.g. the same for every panel of a row);
+    by default the object fills `fill` of the axes.
+    """
+    if ax is None:
+        fig = plt.figure(figsize=(6, 6))
+        ax = fig.add_subplot(projection="3d", proj_type="ortho")
+    V = np.asarray(V, dtype=float)
+    F = np.asarray(F, dtype=np.int64)
+    eye, up, right = camera_frame(elev, azim)
+    if light is None:
+        light = 0.75 * eye + 0.55 * up - 0.35 * right
+    light = np.asarray(light, float) / np.linalg.norm(light)
+    normals, _ = face_normals(V, F)
+    colors = shade(normals, eye, light)
+    verts = list(V[F])    # (m,3,3)
+    fcol = [colors]
+    ecol = [colors]       # seams painted in the face colour hide antialiasing cracks
+    segs_all, seg_col = _line_segments(V, F, L, normals, creases, aux, crease_deg)
+    if segs_all:
+        segs = np.concatenate(segs_all)
+        # depth bias towards the camera, per segment: a fraction of its own length (enough
+        # to come after the two triangles it bounds, small enough to stay behind sheet
+        # layers lying in front of it)
+        seglen = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1)
+        segs = segs + (bias * seglen)[:, None, None] * eye[None, None, :]
+        verts += list(segs)
+        fcol.append(np.zeros((len(segs), 4)))
+        ecol.append(np.concatenate(seg_col))
+    lw = seam_width if not segs_all else crease_width
+    # one linewidth per collection (mplot3d does not reorder per-item widths): seams are
+    # drawn at the same width but in the face colour, so they are invisible
+    coll = Poly3DCollection(verts, facecolors=np.concatenate(fcol), edgecolors=np.concatenate(ecol),
+                            linewidths=lw, zsort="average", antialiased=True)
+    ax.add_collection3d(coll)
+    _fit_view(ax, V, elev, azim, up, right, center, radius, fill)
     return ax
 
 

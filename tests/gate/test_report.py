@@ -3,7 +3,7 @@ roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor i
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
 busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
 PerVertex), the frozen step on a fresh layout beside the prepared one (class FrozenFresh) and
-the first touch of memory against streaming (class FirstTouch).
+the first touch of memory against streaming (class FirstTouch), the CPU line (class CpuLine).
 Wrong code the rooflines catch: the gather kernel taken as the roof (it is the lowest, so every
 pass would look closer to memory-bound), the floor computed from the streaming rate or from the
 other thread count's line rate, bytes read as lines; each class names its own."""
@@ -78,6 +78,28 @@ class MachineLoad(unittest.TestCase):
 
     def test_without_the_earlier_reading_the_start_load_decides(self):
         self.assertEqual(len(self.busy({})), 1)
+
+
+class CpuLine(unittest.TestCase):
+    """The report's CPU line names the core generation where run.json records it and says when
+    lscpu gave no cache sizes. Wrong code this catches: the generation dropped (two VM kinds
+    named "AMD EPYC" would read alike), empty cache fields printed as "L2 , L3 "."""
+
+    def test_generation_and_family_are_named(self):
+        line = bench_report.cpu_line({"model": "AMD EPYC", "microarchitecture": "zen5", "family": 26,
+                                      "model_number": 2, "l2": "2 MiB", "l3": "32 MiB"}, {})
+        self.assertTrue(line.startswith("AMD EPYC (Zen 5, family 26 model 2);"), line)
+        self.assertIn("L2 2 MiB, L3 32 MiB", line)
+
+    def test_missing_caches_are_said_missing(self):
+        line = bench_report.cpu_line({"model": "AMD EPYC", "l2": "", "l3": ""}, {})
+        self.assertIn("caches not reported by lscpu", line)
+        self.assertNotIn("L2 ,", line)
+
+    def test_an_older_run_json_reads_as_before(self):
+        line = bench_report.cpu_line({"model": "AMD EPYC", "hypervisor": "KVM", "l2": "1 MiB"}, {"mhz_per_cpu": 2596})
+        self.assertTrue(line.startswith("AMD EPYC, KVM guest;"), line)
+        self.assertTrue(line.endswith("2596 MHz"), line)
 
 
 class PerVertex(unittest.TestCase):

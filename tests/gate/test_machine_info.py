@@ -1,0 +1,36 @@
+"""scripts/machine_info.py's results-folder tag. Wrong code this catches: two core generations
+behind one generic VM model name ("AMD EPYC") given one tag, so that a run on one overwrites the
+other's results; AMD family 19h's Zen 3 and Zen 4 model ranges confused; a generation appended
+to a name that has a model number (the folder of a named CPU would change for nothing)."""
+import os
+import sys
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "scripts"))
+import machine_info  # noqa: E402
+
+AVX512 = {"Flags": "fpu avx2 avx512f"}
+
+
+def tag(model, cpu, flags=AVX512):
+    return machine_info.tag(dict(flags, **{"Model name": model}), cpu)
+
+
+class Tag(unittest.TestCase):
+    def test_generations_behind_one_generic_name_differ(self):
+        self.assertEqual(tag("AMD EPYC", ("AuthenticAMD", 26, 2)), "amd-epyc-zen5_avx512")
+        self.assertEqual(tag("AMD EPYC", ("AuthenticAMD", 25, 0x11)), "amd-epyc-zen4_avx512")
+        self.assertEqual(tag("AMD EPYC", ("AuthenticAMD", 25, 0x01)), "amd-epyc-zen3_avx512")
+        self.assertEqual(tag("AMD EPYC", ("AuthenticAMD", 25, 0xA0)), "amd-epyc-zen4_avx512")
+        self.assertEqual(tag("AMD EPYC", ("AuthenticAMD", 23, 0x31), {"Flags": "avx2"}), "amd-epyc-zen2_avx2")
+
+    def test_a_model_number_needs_no_generation(self):
+        self.assertEqual(tag("AMD EPYC 9654 96-Core Processor", ("AuthenticAMD", 25, 0x11)), "amd-epyc-9654_avx512")
+
+    def test_unknown_generations_keep_the_plain_name(self):
+        self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 6, 143)), "intel-xeon_avx512")
+        self.assertEqual(tag("AMD EPYC", ("", -1, -1)), "amd-epyc_avx512")
+
+
+if __name__ == "__main__":
+    unittest.main()
