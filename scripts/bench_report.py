@@ -36,6 +36,7 @@ STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
 FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
+CORE_TO_CORE = re.compile(r"^BM_CoreToCore/(?P<threads>\d+)/(?P<bytes>\d+)(?:/[a-z_]+)?$")
 DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PAIR = re.compile(r"^BM_Pair/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 EVENTS = re.compile(r"^BM_Events/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
@@ -285,6 +286,18 @@ def first_touch(benches):
     return out
 
 
+def core_to_core_lines(benches):
+    """The report's sentence on how long the two CPUs take to hand a cache line to each other."""
+    trips = [b.counter("ns_per_round_trip") for name, b in benches.items() if CORE_TO_CORE.match(name) and b.times]
+    if not trips:
+        return []
+    return [f"Two CPUs hand a 64-byte line back and forth in {trips[0]:.0f} ns a round trip (`BM_CoreToCore`, "
+            "a counter each of two pinned threads waits for in turn): what a line written by one thread and "
+            "read next by the other costs, as the parallel passes do at their blocks' borders and in their "
+            "reductions. Cores sharing a last-level cache answer faster than cores on separate ones, whose "
+            "caches each hold only their own thread's part of the state.", ""]
+
+
 def first_touch_lines(benches, stream):
     """The report's sentence on what a first touch of memory costs, against streaming 4 KiB."""
     touch = first_touch(benches)
@@ -389,6 +402,7 @@ def roofline_section(benches, charts):
             lines.append(f"| {threads} | " + " | ".join(f"{stream[threads].get(k, float('nan')):.1f}" for k in kernels) + " |")
         lines.append("")
     lines += first_touch_lines(benches, stream)
+    lines += core_to_core_lines(benches)
     if "roofline.png" in charts:
         lines += ["![each pass against the measured bandwidth](roofline.png)", ""]
     if rows:

@@ -2,8 +2,9 @@
 roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor is its modelled
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
 busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
-PerVertex), the frozen step on a fresh layout beside the prepared one (class FrozenFresh) and
-the first touch of memory against streaming (class FirstTouch), the CPU line (class CpuLine).
+PerVertex), the frozen step on a fresh layout beside the prepared one (class FrozenFresh), the
+first touch of memory against streaming (class FirstTouch), the CPU line (class CpuLine) and the
+CPUs' cache-line round trip (class CoreToCore).
 Wrong code the rooflines catch: the gather kernel taken as the roof (it is the lowest, so every
 pass would look closer to memory-bound), the floor computed from the streaming rate or from the
 other thread count's line rate, bytes read as lines; each class names its own."""
@@ -78,6 +79,20 @@ class MachineLoad(unittest.TestCase):
 
     def test_without_the_earlier_reading_the_start_load_decides(self):
         self.assertEqual(len(self.busy({})), 1)
+
+
+class CoreToCore(unittest.TestCase):
+    """BM_CoreToCore's round trip is quoted from its counter. Wrong code this catches: the
+    iteration time (ms for 100,000 round trips) printed instead of ns_per_round_trip, a sentence
+    without the benchmark in the run."""
+
+    def test_round_trip_from_the_counter(self):
+        b = {"BM_CoreToCore/2/64/manual_time": bench("BM_CoreToCore/2/64/manual_time", 50.8, ns_per_round_trip=507.5)}
+        lines = bench_report.core_to_core_lines(b)
+        self.assertIn("in 508 ns a round trip", lines[0])
+
+    def test_no_benchmark_no_sentence(self):
+        self.assertEqual(bench_report.core_to_core_lines(benches()), [])
 
 
 class CpuLine(unittest.TestCase):
