@@ -43,8 +43,8 @@ struct alignas(64) Line {
   std::atomic<long> turn{0};
 };
 
-/// kRoundTrips round trips between this thread and `partner`'s, timed on this thread: this one
-/// writes odd values, the partner answers each with the next even one.
+/// kRoundTrips round trips, timed on this thread: it writes odd values from base + 1 on, and
+/// the partner thread answers each with the next even one.
 double bounce(Line& line, long base) {
   const Clock::time_point t0 = Clock::now();
   for (long i = 0; i < kRoundTrips; ++i) {
