@@ -30,21 +30,12 @@ def lscpu():
 
 
 def cpu_flags(info):
-    flags = info.get("Flags", "")
-    if not flags:  # lscpu without a Flags line: read /proc/cpuinfo
-        try:
-            with open("/proc/cpuinfo") as f:
-                for line in f:
-                    if line.startswith("flags"):
-                        flags = line.partition(":")[2]
-                        break
-        except OSError:
-            pass
+    flags = info.get("Flags", "") or cpuinfo().get("flags", "")  # lscpu without a Flags line
     return set(flags.split())
 
 
-def cpu_id():
-    """(vendor, family, model) from /proc/cpuinfo's first processor; empty and -1 when unread."""
+def cpuinfo():
+    """/proc/cpuinfo's first processor block as {key: value}; empty when unread."""
     found = {}
     try:
         with open("/proc/cpuinfo") as f:
@@ -57,6 +48,12 @@ def cpu_id():
                 found.setdefault(key.strip(), value.strip())
     except OSError:
         pass
+    return found
+
+
+def cpu_id():
+    """(vendor, family, model) from /proc/cpuinfo's first processor; empty and -1 when unread."""
+    found = cpuinfo()
     number = lambda k: int(found[k]) if found.get(k, "").isdigit() else -1  # noqa: E731
     return found.get("vendor_id", ""), number("cpu family"), number("model")
 
