@@ -24,10 +24,21 @@ namespace crumple::fast {
 // Zen 4 executes vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
 // itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
+// The scalar kernels prefetch the rows read by the element a fixed distance ahead. Each element's
+// loads wait on one another's arithmetic (the adapt test hashes and divides), so the core's
+// reorder window holds only a few elements' misses at a time; the eight-lane edge pass issues
+// its 80 row loads before any arithmetic and gains nothing from a prefetch (docs/PERFORMANCE.md).
+constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
+constexpr int kTestAhead = 32;      ///< adapt_test: six row loads an edge
+
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, const std::uint8_t* __restrict alive,
                                                const Float4* __restrict xm, float unit, Float4* __restrict area,
                                                int begin, int end) {
   for (int t = begin; t < end; ++t) {
+    if (t + kTriangleAhead < end) {
+      const Face& next = faces[t + kTriangleAhead];
+      for (int k = 0; k < 3; ++k) __builtin_prefetch(&xm[next.v[k]]);
+    }
     const Face& f = faces[t];
     const Float4 pa = xm[f.v[0]], pb = xm[f.v[1]], pc = xm[f.v[2]];
     const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
@@ -387,10 +398,17 @@ CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord*
   const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent,
               budget = c.budget, unit = c.unit;
   const bool fracture = c.fracture, restoration = c.restoration;
+  // A missing wing (-1) reads vertex 0's row instead, masked below: no branch on the wings.
+  auto wing = [](int w) { return w & ~(w >> 31); };
   for (int e = begin; e < end; ++e) {
+    if (e + kTestAhead < end) {
+      const EdgeRecord& next = edges[e + kTestAhead];
+      for (int v : {next.a, next.b}) __builtin_prefetch(&xm[v]), __builtin_prefetch(&nr[v]);
+      __builtin_prefetch(&nr[wing(next.wl)]), __builtin_prefetch(&nr[wing(next.wr)]);
+    }
     const EdgeRecord& edge = edges[e];
     const int a = edge.a, b = edge.b;
-    const int l = edge.wl & ~(edge.wl >> 31), r = edge.wr & ~(edge.wr >> 31);  // -1 -> 0, masked below
+    const int l = wing(edge.wl), r = wing(edge.wr);
     const bool two_wings = (edge.wl >= 0) & (edge.wr >= 0);
     // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
     // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
