@@ -75,12 +75,17 @@ void for_list(const std::int32_t* list, int n, F f) {
 
 // The 32-byte records the gather reads are scattered, and a vertex's loads are few, so the
 // gather fetches the first kFixed records of the vertex kAhead places on while it sums this one
-// (entries past a list's count fetch the zero record). The Jacobi sweep and the normals do not:
-// their 16-byte records mostly hit the cache, and prefetching them made those passes slower
-// (docs/PERFORMANCE.md).
+// (entries past a list's count fetch the zero record), and that vertex's first kFixed
+// neighbours' velocity rows, which the vertices created since the last relayout (at the
+// arrays' end) scatter. The Jacobi sweep and the normals do not: their 16-byte records mostly
+// hit the cache, and prefetching them made those passes slower (docs/PERFORMANCE.md).
 constexpr int kAhead = 6;  ///< far enough for the records to arrive, near enough to stay in L1
 void prefetch_list(const EdgeOut* records, const std::int32_t* list, int count, int shift) {
   for (int k = 0; k < kFixed; ++k) __builtin_prefetch(k < count ? &records[list[k] >> shift] : &kZeroRow);
+}
+/// Entries past the count fetch the row of `self`, which the gather reads anyway.
+void prefetch_rows(const Float4* rows, const std::int32_t* list, int count, int self) {
+  for (int k = 0; k < kFixed; ++k) __builtin_prefetch(&rows[k < count ? list[k] : self]);
 }
 }  // namespace
 
@@ -230,6 +235,7 @@ void gather_forces(const Topology& m, const EdgeOut* records, const StepConstant
       const ListHead sa = V.spring_list[a], ta = V.tri_list[a];
       prefetch_list(out, &V.springs[sa.at], sa.count, 1);
       prefetch_list(out, &V.wings[ta.at], ta.count, 0);
+      prefetch_rows(vm, &V.nbrs[sa.at], sa.count, a);
     }
     // Per spring, its record and the implicit block W_e = w (m_v + m_o) I [Eq 5, D17] with
     // W_e (v_o - v) from the rows of v and of the neighbour o (nothing per edge to store for
