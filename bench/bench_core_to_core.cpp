@@ -68,15 +68,30 @@ void BM_CoreToCore(benchmark::State& state) {
   pthread_getaffinity_np(self, sizeof before, &before);
   Line line;
   std::atomic<bool> stop{false};
+  std::atomic<int> partner_pinned{-1};  // -1 until the partner has tried, then 0 or 1
   std::thread partner([&] {
-    pin_to(cpus[1]);
+    partner_pinned = pin_to(cpus[1]) ? 1 : 0;
     long seen = 0;
     while (!stop.load(std::memory_order_relaxed)) {
       const long v = line.turn.load(std::memory_order_acquire);
       if (v != seen && (v & 1)) line.turn.store(v + 1, std::memory_order_release), seen = v + 1;
     }
   });
-  pin_to(cpus[0]);
+  const bool pinned = pin_to(cpus[0]);
+  while (partner_pinned.load() < 0) std::this_thread::yield();
+  auto finish = [&] {
+    stop = true;
+    partner.join();
+    pthread_setaffinity_np(self, sizeof before, &before);  // the benchmarks after this one run unpinned
+  };
+  // Unpinned, the two threads may share one CPU, and a round trip would time the scheduler.
+  if (!pinned || partner_pinned.load() != 1) {
+    finish();
+    const std::string error =
+        "could not pin its two threads to CPUs " + std::to_string(cpus[0]) + " and " + std::to_string(cpus[1]);
+    state.SkipWithError(error.c_str());
+    return;
+  }
   double seconds = 0;
   long base = 0;
   for (auto _ : state) {
@@ -85,9 +100,7 @@ void BM_CoreToCore(benchmark::State& state) {
     state.SetIterationTime(s);
     seconds += s;
   }
-  stop = true;
-  partner.join();
-  pthread_setaffinity_np(self, sizeof before, &before);  // the benchmarks after this one run unpinned
+  finish();
   state.counters["ns_per_round_trip"] = 1e9 * seconds / (double(kRoundTrips) * double(state.iterations()));
 }
 
