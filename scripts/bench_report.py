@@ -286,12 +286,22 @@ def first_touch(benches):
     return out
 
 
+# Repetitions of BM_CoreToCore further apart than this ratio measured two placements of the CPUs.
+PLACEMENT_SPREAD = 1.5
+
+
 def core_to_core_lines(benches):
     """The report's sentence on how long the two CPUs take to hand a cache line to each other."""
-    trips = [b.counter("ns_per_round_trip") for name, b in benches.items() if CORE_TO_CORE.match(name) and b.times]
-    if not trips:
+    found = [b for name, b in benches.items() if CORE_TO_CORE.match(name) and b.times]
+    if not found:
         return []
-    return [f"Two CPUs hand a 64-byte line back and forth in {trips[0]:.0f} ns a round trip (`BM_CoreToCore`, "
+    trips = [v for v in found[0].counters.get("ns_per_round_trip", []) if isinstance(v, (int, float)) and v > 0]
+    spread = ""
+    if trips and max(trips) > PLACEMENT_SPREAD * min(trips):
+        spread = (f" (the median of repetitions from {min(trips):.0f} to {max(trips):.0f} ns: the two CPUs' "
+                  "distance changed during the run, as when a VM's host moves its vCPUs between chips)")
+    return [f"Two CPUs hand a 64-byte line back and forth in {found[0].counter('ns_per_round_trip'):.0f} ns a "
+            f"round trip{spread} (`BM_CoreToCore`, "
             "a counter each of two pinned threads waits for in turn): what a line written by one thread and "
             "read next by the other costs, as the parallel passes do at their blocks' borders and in their "
             "reductions. Cores sharing a last-level cache answer faster than cores on separate ones, whose "

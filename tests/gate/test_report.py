@@ -82,14 +82,32 @@ class MachineLoad(unittest.TestCase):
 
 
 class CoreToCore(unittest.TestCase):
-    """BM_CoreToCore's round trip is quoted from its counter. Wrong code this catches: the
-    iteration time (ms for 100,000 round trips) printed instead of ns_per_round_trip, a sentence
-    without the benchmark in the run."""
+    """BM_CoreToCore's round trip is quoted from its counter, with the repetitions' range when
+    they measured two placements of the CPUs. Wrong code this catches: the iteration time (ms for
+    100,000 round trips) printed instead of ns_per_round_trip, a sentence without the benchmark
+    in the run, the range left out of a bimodal run (the median alone then reads as the machine's
+    one distance) or printed for an ordinary spread."""
+
+    NAME = "BM_CoreToCore/2/64/manual_time"
 
     def test_round_trip_from_the_counter(self):
-        b = {"BM_CoreToCore/2/64/manual_time": bench("BM_CoreToCore/2/64/manual_time", 50.8, ns_per_round_trip=507.5)}
+        b = {self.NAME: bench(self.NAME, 50.8, ns_per_round_trip=507.5)}
         lines = bench_report.core_to_core_lines(b)
-        self.assertIn("in 508 ns a round trip", lines[0])
+        self.assertIn("in 508 ns a round trip (`BM_CoreToCore`", lines[0])
+
+    def repetitions(self, trips):
+        b = bench(self.NAME, 10.0)
+        b.times = [t / 10.0 for t in trips]
+        b.counters = {"ns_per_round_trip": trips}
+        return bench_report.core_to_core_lines({self.NAME: b})[0]
+
+    def test_two_placements_give_the_range(self):
+        line = self.repetitions([101.0, 446.0, 103.0, 480.0, 435.0])
+        self.assertIn("in 435 ns a round trip (the median of repetitions from 101 to 480 ns", line)
+
+    def test_an_ordinary_spread_gives_no_range(self):
+        line = self.repetitions([479.0, 440.0, 445.0, 493.0, 451.0])
+        self.assertIn("in 451 ns a round trip (`BM_CoreToCore`", line)
 
     def test_no_benchmark_no_sentence(self):
         self.assertEqual(bench_report.core_to_core_lines(benches()), [])
