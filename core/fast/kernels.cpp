@@ -24,10 +24,11 @@ namespace crumple::fast {
 // Zen 4 executes vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
 // itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
 namespace {
-// The scalar kernels prefetch the rows read by the element a fixed distance ahead. Each element's
-// loads wait on one another's arithmetic (the adapt test hashes and divides), so the core's
-// reorder window holds only a few elements' misses at a time; the eight-lane edge pass issues
-// its 80 row loads before any arithmetic and gains nothing from a prefetch (docs/PERFORMANCE.md).
+// The scalar kernels prefetch the rows read by the element a fixed distance ahead: an element is
+// tens of instructions (the adapt test's hash, square root and division), so the core's reorder
+// window spans only a few elements and few of their misses overlap. The eight-lane edge pass
+// issues its 80 row loads before any arithmetic and gains nothing from a prefetch
+// (docs/PERFORMANCE.md).
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
 constexpr int kTestAhead = 32;      ///< adapt_test: six row loads an edge
 
