@@ -6,6 +6,10 @@
 #
 # Usage: scripts/ab.sh A_BINARY B_BINARY FILTER [ROUNDS=4] [REPETITIONS=3] [COUNTER]
 # COUNTER: the user counter to compare (default: the benchmark's real time), e.g. us_per_event.
+# CRUMPLE_AB_PLACEMENT=1: before each round, A's binary measures how far apart the first two
+# CPUs are (BM_CoreToCore's round trip), printed a round under the table: a VM's host may move
+# its vCPUs between chips from one minute to the next, which changes two-thread timings
+# (docs/PERFORMANCE.md), so rounds that disagree can be told apart.
 # Copy the binaries out of the build folder first, so a rebuild cannot change one mid-run.
 set -euo pipefail
 if (($# < 3)); then
@@ -19,7 +23,13 @@ done
 [[ $rounds =~ ^[1-9][0-9]*$ && $reps =~ ^[1-9][0-9]*$ ]] || { echo "ab.sh: ROUNDS and REPETITIONS must be positive integers" >&2; exit 2; }
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
+placement=${CRUMPLE_AB_PLACEMENT:-0}
 for r in $(seq "$rounds"); do
+  if [[ $placement == 1 ]]; then
+    "$a" --benchmark_filter='^BM_CoreToCore/' --benchmark_min_time=0.05 --benchmark_format=json \
+      --benchmark_out="$out/trip$r.json" --benchmark_out_format=json > /dev/null \
+      || { echo "ab.sh: BM_CoreToCore failed before round $r" >&2; exit 1; }
+  fi
   order="A B"; ((r % 2)) || order="B A"
   for side in $order; do
     bin=$a; [[ $side == B ]] && bin=$b
@@ -29,9 +39,9 @@ for r in $(seq "$rounds"); do
       || { echo "ab.sh: $bin failed in round $r" >&2; exit 1; }
   done
 done
-/usr/bin/python3 - "$out" "$rounds" "$counter" <<'EOF'
+/usr/bin/python3 - "$out" "$rounds" "$counter" "$placement" <<'EOF'
 import json, statistics, sys
-out, rounds, counter = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+out, rounds, counter, placement = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4] == "1"
 def medians(side, r):
     path, rows = f"{out}/{side}{r}.json", {}
     try:
@@ -61,4 +71,12 @@ for n in names:
     fmt = lambda xs: " ".join(f"{x:.3g}" for x in xs)
     print(f"| {n} | {fmt(A)} | {fmt(B)} | {statistics.median(A):.3g} | {statistics.median(B):.3g} "
           f"| {statistics.median(ratios):.3f} |")
+if placement:
+    trips = []
+    for r in range(1, rounds + 1):
+        rows = [b for b in json.load(open(f"{out}/trip{r}.json")).get("benchmarks", []) if "ns_per_round_trip" in b]
+        if not rows:
+            sys.exit(f"ab.sh: BM_CoreToCore gave no round trip before round {r} (not in A's binary, or it could not pin two CPUs)")
+        trips.append(rows[0]["ns_per_round_trip"])
+    print("\nThe first two CPUs' round trip before each round (BM_CoreToCore, ns): " + " ".join(f"{t:.0f}" for t in trips))
 EOF

@@ -4,7 +4,8 @@ Each fake binary is a small script that writes Google Benchmark's JSON (a median
 benchmark) to --benchmark_out, taking its round's value from a list it is given, and logs each
 call; the tests read ab.sh's table. Wrong code this catches: rounds not alternated A, B, A, B;
 the ratio taken of the medians instead of per round; the counter ignored; a filter that matched
-nothing, or a missing binary, accepted silently.
+nothing, or a missing binary, accepted silently; with CRUMPLE_AB_PLACEMENT=1, the round trips
+printed out of round order, measured when not asked for, or a missing one passed over.
 """
 import os
 import stat
@@ -20,8 +21,16 @@ AB = ROOT / "scripts" / "ab.sh"
 FAKE = textwrap.dedent("""\
     #!/usr/bin/python3
     import json, sys
-    values, log, names, mode = {values!r}, {log!r}, {names!r}, {mode!r}
+    values, log, names, mode, trips = {values!r}, {log!r}, {names!r}, {mode!r}, {trips!r}
     out = next(a.split("=", 1)[1] for a in sys.argv if a.startswith("--benchmark_out="))
+    if "CoreToCore" in next(a for a in sys.argv if a.startswith("--benchmark_filter=")):
+        with open(log, "a") as f:  # logged apart from the rounds' runs
+            f.write({side!r} + "T\\n")
+        k = open(log).read().split().count({side!r} + "T")
+        rows = [{{"name": "BM_CoreToCore/2/64/manual_time", "run_type": "iteration",
+                  "ns_per_round_trip": trips[k - 1]}}] if trips else []
+        json.dump({{"benchmarks": rows}}, open(out, "w"))
+        sys.exit(0)
     with open(log, "a") as f:
         f.write({side!r} + "\\n")
     calls = open(log).read().split().count({side!r})
@@ -53,15 +62,16 @@ class AbScript(unittest.TestCase):
     def tearDown(self):
         self.dir.cleanup()
 
-    def fake(self, side, values, names=("BM_Events/fast/1/128",), mode="median"):
+    def fake(self, side, values, names=("BM_Events/fast/1/128",), mode="median", trips=()):
         path = os.path.join(self.dir.name, side)
         Path(path).write_text(FAKE.format(values=list(values), log=self.log, names=list(names), side=side,
-                                          mode=mode))
+                                          mode=mode, trips=list(trips)))
         os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
         return path
 
-    def run_ab(self, *args):
-        return subprocess.run(["bash", str(AB), *args], capture_output=True, text=True, timeout=60)
+    def run_ab(self, *args, placement=False):
+        env = dict(os.environ, CRUMPLE_AB_PLACEMENT="1" if placement else "0")
+        return subprocess.run(["bash", str(AB), *args], capture_output=True, text=True, timeout=60, env=env)
 
     def row(self, stdout, name):
         line = next(l for l in stdout.splitlines() if l.startswith(f"| {name} "))
@@ -120,6 +130,27 @@ class AbScript(unittest.TestCase):
         r = self.run_ab(self.fake("A", [1], names=()), self.fake("B", [1], names=()), "NOPE", "1", "1")
         self.assertNotEqual(r.returncode, 0)
         self.assertIn("matched no benchmark", r.stderr)
+
+    def test_placement_before_each_round(self):
+        a = self.fake("A", [10, 20, 5], trips=[100, 480, 120])
+        b = self.fake("B", [5, 16, 4.5])
+        r = self.run_ab(a, b, "BM_Events", "3", "2", placement=True)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("before each round (BM_CoreToCore, ns): 100 480 120\n", r.stdout)
+        self.assertEqual(Path(self.log).read_text().split(), ["AT", "A", "B", "AT", "B", "A", "AT", "A", "B"])
+        self.assertEqual(self.row(r.stdout, "BM_Events/fast/1/128")[-1], "0.800")
+
+    def test_no_placement_unless_asked(self):
+        r = self.run_ab(self.fake("A", [1, 2], trips=[100, 100]), self.fake("B", [1, 2]), "BM_Events", "2", "1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertNotIn("round trip", r.stdout)
+        self.assertNotIn("AT", Path(self.log).read_text().split())
+
+    def test_a_missing_round_trip_fails(self):
+        r = self.run_ab(self.fake("A", [1]), self.fake("B", [1]), "BM_Events", "1", "1", placement=True)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("gave no round trip before round 1", r.stderr)
+        self.assertNotIn("Traceback", r.stderr)
 
     def test_bad_arguments_fail(self):
         a = self.fake("A", [1])
