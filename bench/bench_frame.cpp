@@ -61,6 +61,7 @@
 #include "bytes_moved.h"
 #include "crumple/crumple.h"
 #include "prepared.h"
+#include "probe_common.h"
 #include "mesh/input_mesh.h"
 #include "sim/backends.h"
 #include "sim/run.h"
@@ -69,12 +70,8 @@
 namespace crumple::bench {
 namespace {
 
-/// Where the timed frames start: this fraction of params.sphere_time (1.2 s with the paper's
-/// parameters, frame 72), well into the crumple, where every N from 32 to 1024 splits and
-/// restores edges every frame and stays stable past the timed frames (docs/PERFORMANCE.md,
-/// "The benchmarks' prepared state"). An unstable prepared state skips the benchmark with the
-/// reason instead of timing it.
-constexpr double kPrepFraction = 0.6;
+// The timed frames start at the prepared point (probe_common.h). An unstable prepared state
+// skips the benchmark with the reason instead of timing it.
 
 /// Largest N at which the reference backend is benchmarked: a frame must cost under ~2 s, and a
 /// reference frame at N = 1024 costs about that, after minutes of preparation, so N = 1024 is
@@ -95,7 +92,7 @@ Prepared make_prepared(const std::string& backend, int threads, int n, Config co
   p.substeps = params.substeps;
   p.size = size;
   p.sim = make_simulator(backend, mesh, params, threads);
-  const int prep_frames = int(std::lround(kPrepFraction * params.sphere_time / params.frame_dt));
+  const int prep_frames = prepared_frames(params);
   for (int f = 1; f <= prep_frames; ++f) {
     const FrameStats s = run_frame(*p.sim, params, f);  // the default: substeps chosen per frame
     if (std::string why = instability(s.totals, size); !why.empty()) {

@@ -25,12 +25,12 @@
 #include "bench_common.h"
 #include "bytes_moved.h"
 #include "mesh/input_mesh.h"
+#include "probe_common.h"
 #include "sim/backends.h"
 
 namespace crumple::bench {
 namespace {
 
-constexpr double kPrepFraction = 0.6;     ///< same prepared point as BM_Frame
 constexpr std::array<int, 2> kPassSizes{128, 256};
 
 std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, int n) {
@@ -39,7 +39,7 @@ std::unique_ptr<Simulator>& prepared(const std::string& backend, int threads, in
   if (!sim) {
     const Params params;
     sim = make_simulator(backend, make_grid(n), params, threads);
-    const int steps = int(std::lround(kPrepFraction * params.sphere_time / params.h()));
+    const int steps = int(std::lround(kPrepFraction * params.sphere_time / params.h()));  // BM_Frame's point
     for (int s = 0; s < steps; ++s) sim->step();
   }
   return sim;

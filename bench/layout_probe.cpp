@@ -23,6 +23,7 @@
 #include "fast/fast_sim.h"
 #include "mesh/input_mesh.h"
 #include "model/params.h"
+#include "probe_common.h"
 #include "sim/run.h"
 
 namespace {
@@ -38,17 +39,6 @@ struct RunResult {
   double faults = 0;           ///< minor page faults a frame (mean)
   double relayout_faults = 0;  ///< minor page faults a frame that relayouts (mean; 0 if none)
 };
-
-/// Parses a whole decimal integer or number, or exits with a one-line error naming it.
-double number(const char* text, const char* what, bool integer) {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v) || (integer && v != std::floor(v))) {
-    std::fprintf(stderr, "crumple_layout_probe: %s must be %s, got '%s'\n", what, integer ? "an integer" : "a number", text);
-    std::exit(2);
-  }
-  return v;
-}
 
 /// The process's minor page faults so far.
 double minor_faults() {
@@ -121,6 +111,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]\n");
     return 2;
   }
+  auto number = [](const char* text, const char* what, bool integer) {
+    return crumple::bench::parse_number("crumple_layout_probe", text, what, integer);
+  };
   const int n = int(number(argv[1], "N", true)), threads = int(number(argv[2], "THREADS", true));
   const int frames = int(number(argv[3], "FRAMES", true)), rounds = int(number(argv[4], "ROUNDS", true));
   if (n < 4 || threads < 1 || frames < 1 || rounds < 1) {
@@ -132,7 +125,7 @@ int main(int argc, char** argv) {
 
   const crumple::Params params = crumple::paper_params();
   FastSimulator prepared(crumple::make_grid(n), params, threads);
-  const int prep_frames = int(std::lround(0.6 * params.sphere_time / params.frame_dt));
+  const int prep_frames = crumple::bench::prepared_frames(params);
   for (int f = 1; f <= prep_frames; ++f) crumple::run_frame(prepared, params, f);
   std::printf("N = %d, %d thread(s), %d vertices at frame %d; %d timed frames a run\n", n, threads,
               prepared.totals().vertices, prep_frames, frames);

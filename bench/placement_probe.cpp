@@ -22,6 +22,7 @@
 #include "fast/fast_sim.h"
 #include "mesh/input_mesh.h"
 #include "model/params.h"
+#include "probe_common.h"
 #include "sim/run.h"
 
 namespace {
@@ -32,18 +33,6 @@ struct Round {
   double trip_ns = 0;
   double ms[2] = {};  ///< a frame on 1 and on 2 threads
 };
-
-/// Parses a whole decimal integer or number, or exits with a one-line error naming it.
-double number(const char* text, const char* what, bool integer) {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v) || (integer && v != std::floor(v))) {
-    std::fprintf(stderr, "crumple_placement_probe: %s must be %s, got '%s'\n", what, integer ? "an integer" : "a number",
-                 text);
-    std::exit(2);
-  }
-  return v;
-}
 
 /// Milliseconds a frame over `frames` frames of a clone of `prepared`, after one untimed frame.
 double frame_ms(const crumple::fast::FastSimulator& prepared, const crumple::Params& params, int first, int frames) {
@@ -86,6 +75,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: crumple_placement_probe N FRAMES ROUNDS GAP [NEAR_NS]\n");
     return 2;
   }
+  auto number = [](const char* text, const char* what, bool integer) {
+    return crumple::bench::parse_number("crumple_placement_probe", text, what, integer);
+  };
   const int n = int(number(argv[1], "N", true)), frames = int(number(argv[2], "FRAMES", true));
   const int count = int(number(argv[3], "ROUNDS", true));
   const double gap = number(argv[4], "GAP", false), near_ns = argc > 5 ? number(argv[5], "NEAR_NS", false) : 250.0;
@@ -101,7 +93,7 @@ int main(int argc, char** argv) {
 
   const crumple::Params params = crumple::paper_params();
   crumple::fast::FastSimulator one(crumple::make_grid(n), params, 1), two(crumple::make_grid(n), params, 2);
-  const int prep = int(std::lround(0.6 * params.sphere_time / params.frame_dt));
+  const int prep = crumple::bench::prepared_frames(params);
   for (int f = 1; f <= prep; ++f) crumple::run_frame(one, params, f), crumple::run_frame(two, params, f);
   std::printf("N = %d, %d vertices at frame %d; CPUs %d and %d; %d timed frames a run\n", n, one.totals().vertices,
               prep, cpus[0], cpus[1], frames);

@@ -69,8 +69,12 @@ class Bench:
             return float("nan")
         return 100.0 * statistics.stdev(self.times) / statistics.mean(self.times)
 
+    def values(self, key):
+        """The counter's finite values, one per repetition."""
+        return [v for v in self.counters.get(key, []) if isinstance(v, (int, float)) and math.isfinite(v)]
+
     def counter(self, key):
-        vals = [v for v in self.counters.get(key, []) if isinstance(v, (int, float)) and math.isfinite(v)]
+        vals = self.values(key)
         return statistics.median(vals) if vals else float("nan")
 
 
@@ -295,9 +299,9 @@ def core_to_core_lines(benches):
     found = [b for name, b in benches.items() if CORE_TO_CORE.match(name) and b.times]
     if not found:
         return []
-    trips = [v for v in found[0].counters.get("ns_per_round_trip", []) if isinstance(v, (int, float)) and v > 0]
+    trips = found[0].values("ns_per_round_trip")
     spread = ""
-    if trips and max(trips) > PLACEMENT_SPREAD * min(trips):
+    if trips and min(trips) > 0 and max(trips) > PLACEMENT_SPREAD * min(trips):
         spread = (f" (the median of repetitions from {min(trips):.0f} to {max(trips):.0f} ns: the two CPUs' "
                   "distance changed during the run, as when a VM's host moves its vCPUs between chips)")
     return [f"Two CPUs hand a 64-byte line back and forth in {found[0].counter('ns_per_round_trip'):.0f} ns a "
@@ -527,7 +531,7 @@ def pair_rows(benches):
         m = PAIR.match(name)
         if not m or not b.times:
             continue
-        ratios = [v for v in b.counters.get("speedup", []) if isinstance(v, (int, float)) and math.isfinite(v) and v > 0]
+        ratios = [v for v in b.values("speedup") if v > 0]
         if ratios:
             rows.append((m["backend"], int(m["n"]), b.counter("ms_1t"), b.counter("ms_2t"), statistics.median(ratios),
                          min(ratios), max(ratios), len(ratios)))
