@@ -73,4 +73,11 @@ double round_trip_seconds(int a, int b, long trips) {
   return seconds;
 }
 
+double first_two_cpus_round_trip_ns(long trips) {
+  const std::vector<int> cpus = allowed_cpus();
+  if (cpus.size() < 2) return -1.0;
+  const double seconds = round_trip_seconds(cpus[0], cpus[1], trips);
+  return seconds < 0 ? -1.0 : 1e9 * seconds / double(trips);
+}
+
 }  // namespace crumple::bench

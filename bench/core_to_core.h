@@ -8,6 +8,18 @@
 
 namespace crumple::bench {
 
+/// A round trip below this: the two CPUs share a last-level cache ("near"); above it they do not
+/// ("far"). The Zen 5 VM's placements measured 80-184 and 423-2,700 ns (docs/PERFORMANCE.md).
+inline constexpr double kNearRoundTripNs = 250.0;
+
+/// Round trips BM_Pair samples before each pair: a fraction of a millisecond near, about a
+/// millisecond far, against frames of tens of milliseconds.
+inline constexpr long kPlacementSampleTrips = 2000;
+
+/// The round trip in ns between the first two allowed CPUs, measured with `trips` round trips;
+/// negative when there are fewer than two CPUs or they cannot be pinned.
+double first_two_cpus_round_trip_ns(long trips);
+
 /// The CPUs this process may run on, in order (sched_getaffinity).
 std::vector<int> allowed_cpus();
 

@@ -80,7 +80,8 @@ int main(int argc, char** argv) {
   };
   const int n = int(number(argv[1], "N", true)), frames = int(number(argv[2], "FRAMES", true));
   const int count = int(number(argv[3], "ROUNDS", true));
-  const double gap = number(argv[4], "GAP", false), near_ns = argc > 5 ? number(argv[5], "NEAR_NS", false) : 250.0;
+  const double gap = number(argv[4], "GAP", false), near_ns = argc > 5 ? number(argv[5], "NEAR_NS", false)
+                                                                        : crumple::bench::kNearRoundTripNs;
   if (n < 4 || frames < 1 || count < 1 || gap < 0 || near_ns <= 0) {
     std::fprintf(stderr, "crumple_placement_probe: N must be >= 4, FRAMES and ROUNDS >= 1, GAP >= 0, NEAR_NS > 0\n");
     return 2;

@@ -521,39 +521,85 @@ def events_section(benches):
     return lines
 
 
+def pair_group(b, reps):
+    """(1-thread ms, 2-thread ms, speed-up, lowest, highest, repetitions) over the repetitions
+    `reps` (indices) of one BM_Pair benchmark, or None when none of them has a speed-up."""
+    at = lambda key, i: b.counters.get(key, [])[i] if i < len(b.counters.get(key, [])) else float("nan")
+    reps = [i for i in reps if math.isfinite(at("speedup", i)) and at("speedup", i) > 0]
+    if not reps:
+        return None
+    ratios = [at("speedup", i) for i in reps]
+    return (statistics.median(at("ms_1t", i) for i in reps), statistics.median(at("ms_2t", i) for i in reps),
+            statistics.median(ratios), min(ratios), max(ratios), len(reps))
+
+
+def pair_placements(b):
+    """[(placement, repetition indices, median round trip ns)] of one BM_Pair benchmark: one
+    group of every repetition, named "near" or "far" when all share a placement, "all" followed
+    by a group per placement when they do not; [(None, all, nan)] for a run without the
+    placement counters (BM_Pair before they existed, or CPUs that could not be pinned)."""
+    near = b.counters.get("near_placement", [])
+    trips = b.counters.get("round_trip_ns", [])
+    every = list(range(len(b.counters.get("speedup", []))))
+    if not every:
+        return []
+    if len(near) != len(every) or len(trips) != len(every):
+        return [(None, every, float("nan"))]
+    groups = {name: [i for i in every if (near[i] == 1) == (name == "near")] for name in ("near", "far")}
+    trip = lambda reps: statistics.median(trips[i] for i in reps)
+    if not groups["far"] or not groups["near"]:
+        name = "far" if groups["far"] else "near"
+        return [(name, every, trip(every))]
+    return [("all", every, trip(every))] + [(name, reps, trip(reps)) for name, reps in groups.items()]
+
+
 def pair_rows(benches):
-    """(backend, N, 1-thread ms, 2-thread ms, speed-up, lowest, highest, repetitions) per BM_Pair
-    benchmark. The speed-up is the median over repetitions of each repetition's own ratio (its
-    pairs' summed 1-thread time over their summed 2-thread time: both halves of a pair ran on
-    the machine in the same state), not the ratio of the two sides' medians."""
+    """(backend, N, placement, 1-thread ms, 2-thread ms, speed-up, lowest, highest, repetitions,
+    round trip ns) per BM_Pair benchmark and placement of its two CPUs (pair_placements). The
+    speed-up is the median over repetitions of each repetition's own ratio (its pairs' summed
+    1-thread time over their summed 2-thread time: both halves of a pair ran on the machine in
+    the same state), not the ratio of the two sides' medians; the times are medians of each
+    side's mean frame."""
     rows = []
     for name, b in benches.items():
         m = PAIR.match(name)
         if not m or not b.times:
             continue
-        ratios = [v for v in b.values("speedup") if v > 0]
-        if ratios:
-            rows.append((m["backend"], int(m["n"]), b.counter("ms_1t"), b.counter("ms_2t"), statistics.median(ratios),
-                         min(ratios), max(ratios), len(ratios)))
-    return sorted(rows)
+        for placement, reps, trip in pair_placements(b):
+            group = pair_group(b, reps)
+            if group:
+                rows.append((m["backend"], int(m["n"]), placement) + group + (trip,))
+    order = {None: 0, "all": 0, "near": 1, "far": 2}
+    return sorted(rows, key=lambda r: (r[0], r[1], order[r[2]]))
 
 
-def pair_section(benches):
+def pair_section(benches, context):
     rows = pair_rows(benches)
     if not rows:
         return []
+    placed = any(r[2] is not None for r in rows)
     lines = ["## Two threads against one, in pairs", "",
              "`BM_Pair/<backend>/2/<N>` runs `BM_Frame`'s frames on 1 thread and on 2 back to back in every "
              "iteration (which side goes first alternates), so that the two halves of a pair meet the same "
              "neighbours on a shared machine; each repetition's speed-up is its pairs' summed 1-thread time over "
              "their summed 2-thread time, and the table gives the median over repetitions with the lowest and "
              "highest (the speed-up table above divides medians of separately interleaved benchmarks instead). "
-             "Times: medians of each side's mean frame.", "",
-             "| configuration | N | 1 thread ms | 2 threads ms | speed-up (median) | lowest | highest | reps |",
-             "|---|---:|---:|---:|---:|---:|---:|---:|"]
-    for backend, n, ms1, ms2, med, lo, hi, reps in rows:
-        lines.append(f"| {backend} 2t against 1t | {n} | {fmt_ms(ms1)} | {fmt_ms(ms2)} | {med:.2f}x | {lo:.2f}x | "
-                     f"{hi:.2f}x | {reps} |")
+             "Times: medians of each side's mean frame."]
+    head = "| configuration | N | 1 thread ms | 2 threads ms | speed-up (median) | lowest | highest | reps |"
+    rule = "|---|---:|---:|---:|---:|---:|---:|---:|"
+    if placed:
+        near_ns = context.get("crumple_near_round_trip_ns", "?")  # bench/core_to_core.h, kNearRoundTripNs
+        lines[-1] += (" Before each pair the first two CPUs' round trip is sampled (as `BM_CoreToCore` does); a "
+                      f"repetition whose median is below {near_ns} ns ran with the two CPUs near "
+                      "each other (sharing a last-level cache), above it far apart. When a run saw both, the "
+                      "rows after \"all\" give each placement's repetitions.")
+        head = head.replace("| N |", "| N | placement | round trip ns |")
+        rule = rule.replace("|---:|", "|---:|---|---:|", 1)
+    lines += ["", head, rule]
+    for backend, n, placement, ms1, ms2, med, lo, hi, reps, trip in rows:
+        where = f" {placement} | {trip:.0f} |" if placed else ""
+        lines.append(f"| {backend} 2t against 1t | {n} |{where} {fmt_ms(ms1)} | {fmt_ms(ms2)} | {med:.2f}x | "
+                     f"{lo:.2f}x | {hi:.2f}x | {reps} |")
     lines.append("")
     return lines
 
@@ -829,7 +875,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     lines += budget_section(series, context)
     lines += per_vertex_section(series, context)
     lines += speedup_section(series, charts)
-    lines += pair_section(benches)
+    lines += pair_section(benches, context)
     lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
     lines += events_section(benches)
     lines += default_section(frame_series(benches, DEFAULT), series)

@@ -174,9 +174,41 @@ class Pairs(unittest.TestCase):
         empty = bench_report.Bench("BM_Pair/fast/2/256/manual_time")
         empty.times = [10.0]
         rows = bench_report.pair_rows({name: b, empty.name: empty})
-        self.assertEqual(rows, [("fast", 512, 95.0, 50.0, 1.7, 1.5, 1.9, 3)])
-        table = [line for line in bench_report.pair_section({name: b}) if line.startswith("| fast")]
+        self.assertEqual(len(rows), 1)
+        self.assertEqual(rows[0][:9], ("fast", 512, None, 95.0, 50.0, 1.7, 1.5, 1.9, 3))
+        table = [line for line in bench_report.pair_section({name: b}, {}) if line.startswith("| fast")]
         self.assertEqual(table, ["| fast 2t against 1t | 512 | 95 | 50 | 1.70x | 1.50x | 1.90x | 3 |"])
+
+
+class PairPlacements(unittest.TestCase):
+    """BM_Pair's repetitions grouped by where the VM placed the two CPUs (near_placement, the
+    median round trip). Wrong code this catches: a repetition counted under the other placement
+    (the flag inverted or read from another repetition: the near group's 1.85x and 125 ns would
+    move), a placement's group left out when the run saw both, a lone placement given an "all"
+    row and a copy of itself, the threshold not named."""
+
+    def pair(self, near, trips, speedup):
+        b = bench_report.Bench("BM_Pair/fast/2/256/manual_time")
+        b.times = [30.0] * len(near)
+        b.counters = {"ms_1t": [60.0 + i for i in range(len(near))], "ms_2t": b.times[:], "speedup": speedup,
+                      "near_placement": near, "round_trip_ns": trips}
+        return {b.name: b}
+
+    def test_two_placements_give_a_row_each_after_all(self):
+        benches = self.pair([1, 0, 0, 1, 0], [120.0, 480.0, 500.0, 130.0, 450.0], [1.9, 1.4, 1.5, 1.8, 1.3])
+        rows = bench_report.pair_rows(benches)
+        self.assertEqual([r[2] for r in rows], ["all", "near", "far"])
+        self.assertEqual(rows[0][5:], (1.5, 1.3, 1.9, 5, 450.0))
+        self.assertEqual(rows[1][3:], (61.5, 30.0, 1.85, 1.8, 1.9, 2, 125.0))
+        self.assertEqual(rows[2][3:], (62.0, 30.0, 1.4, 1.3, 1.5, 3, 480.0))
+        lines = bench_report.pair_section(benches, {"crumple_near_round_trip_ns": "250"})
+        self.assertTrue(any("below 250 ns" in line for line in lines))
+        table = [line for line in lines if line.startswith("| fast")]
+        self.assertEqual(table[1], "| fast 2t against 1t | 256 | near | 125 | 61.5 | 30 | 1.85x | 1.80x | 1.90x | 2 |")
+
+    def test_one_placement_gives_one_row_named_after_it(self):
+        rows = bench_report.pair_rows(self.pair([0, 0, 0], [480.0, 500.0, 450.0], [1.4, 1.5, 1.3]))
+        self.assertEqual([(r[2], r[8], r[9]) for r in rows], [("far", 3, 480.0)])
 
 
 class FrozenFresh(unittest.TestCase):
