@@ -86,13 +86,19 @@ def cheapest(rows, budget):
     return min(ok, key=lambda r: r["ms_per_s"]) if ok else None
 
 
-def run_all(a):
+def load_cases():
+    """The reference's studied cases (no demos), each with its final positions as ref_x."""
     ref = ac.load_json(os.path.join(ac.OUT, "reference.json"))
     cases = [c for c in ref["cases"] if not c["demo"] and "reference_steps_per_s" in c]
     for c in cases:
         c["ref_x"] = ac.read_obj(os.path.join(ac.OUT, "reference", c["name"] + ".obj"))[0]
-    methods = list(ac.METHODS)
-    configs = [(ci, m, n) for ci in range(len(cases)) for m in methods for n in ac.sweep_steps(m)]
+    return cases
+
+
+def measure(a, cases, configs):
+    """{(case index, method, n): the first repetition's result with every repetition's cost in
+    reps_ms}, configurations interleaved in a new order each repetition; then the float
+    methods' error on the double (reference) backend."""
     results = {(ci, m, n): {"reps_ms": []} for ci, m, n in configs}
     rng = np.random.default_rng(5)
     for rep in range(a.reps):
@@ -109,42 +115,54 @@ def run_all(a):
                 res["reps_ms"].append(r["ms_per_s"])
             if k % 40 == 0:
                 print(f"  rep {rep + 1}/{a.reps}: {k}/{len(configs)}", flush=True)
-    # float vs double: the approx and explicit methods' error on the reference backend too
     for ci, m, n in configs:
         if ac.METHODS[m][1] == "fast":
             r = one_run(cases[ci], m, n, a.work, backend="reference")
             results[(ci, m, n)]["error_double"] = r.get("error")
             results[(ci, m, n)]["exit_double"] = r["exit"]
-    out_cases = []
-    for ci, c in enumerate(cases):
-        rows = []
-        for m in methods:
-            for n in ac.sweep_steps(m):
-                res = results[(ci, m, n)]
-                row = {"method": m, "steps_per_s": n, "h": 1.0 / n, "backend": ac.METHODS[m][1],
-                       "threads": ac.METHODS[m][2], "exit": res["exit"], "failed": res["exit"] != 0,
-                       "error": res.get("error"), "error_double": res.get("error_double"),
-                       "exit_double": res.get("exit_double"),
-                       "ms_per_s": float(np.median(res["reps_ms"])) if res["reps_ms"] and res["exit"] == 0 else None,
-                       "reps_ms": res["reps_ms"]}
-                if res["exit"] != 0:
-                    row["why"] = res.get("why")
-                    row["time_reached"] = res.get("time_reached")
-                if "energy" in res:
-                    row["energy"] = res["energy"]
-                rows.append(row)
-        front = pareto([(r["ms_per_s"], r["error"]) for r in rows if not r["failed"]])
-        ok = [r for r in rows if not r["failed"]]
-        for i in front:
-            ok[i]["pareto"] = True
-        out_cases.append({"scene": c["scene"], "kappa": c["kappa"], "name": c["name"],
-                          "reference_steps_per_s": c["reference_steps_per_s"],
-                          "reference_change": c.get("reference_change"),
-                          "reference_energy": c.get("energy"), "rows": rows,
-                          "budgets": {f"{b:g}": (lambda r: None if r is None else
-                                                 {"method": r["method"], "steps_per_s": r["steps_per_s"],
-                                                  "ms_per_s": r["ms_per_s"], "error": r["error"]})(cheapest(rows, b))
-                                      for b in BUDGETS}})
+    return results
+
+
+def result_row(m, n, res):
+    """sweep.json's row of one method at step 1/n from its measured result."""
+    row = {"method": m, "steps_per_s": n, "h": 1.0 / n, "backend": ac.METHODS[m][1],
+           "threads": ac.METHODS[m][2], "exit": res["exit"], "failed": res["exit"] != 0,
+           "error": res.get("error"), "error_double": res.get("error_double"),
+           "exit_double": res.get("exit_double"),
+           "ms_per_s": float(np.median(res["reps_ms"])) if res["reps_ms"] and res["exit"] == 0 else None,
+           "reps_ms": res["reps_ms"]}
+    if res["exit"] != 0:
+        row["why"] = res.get("why")
+        row["time_reached"] = res.get("time_reached")
+    if "energy" in res:
+        row["energy"] = res["energy"]
+    return row
+
+
+def case_summary(c, rows):
+    """sweep.json's case: its rows with the Pareto-optimal ones marked, and the cheapest run
+    within each error budget."""
+    front = pareto([(r["ms_per_s"], r["error"]) for r in rows if not r["failed"]])
+    ok = [r for r in rows if not r["failed"]]
+    for i in front:
+        ok[i]["pareto"] = True
+    return {"scene": c["scene"], "kappa": c["kappa"], "name": c["name"],
+            "reference_steps_per_s": c["reference_steps_per_s"],
+            "reference_change": c.get("reference_change"),
+            "reference_energy": c.get("energy"), "rows": rows,
+            "budgets": {f"{b:g}": (lambda r: None if r is None else
+                                   {"method": r["method"], "steps_per_s": r["steps_per_s"],
+                                    "ms_per_s": r["ms_per_s"], "error": r["error"]})(cheapest(rows, b))
+                        for b in BUDGETS}}
+
+
+def run_all(a):
+    cases = load_cases()
+    methods = list(ac.METHODS)
+    configs = [(ci, m, n) for ci in range(len(cases)) for m in methods for n in ac.sweep_steps(m)]
+    results = measure(a, cases, configs)
+    out_cases = [case_summary(c, [result_row(m, n, results[(ci, m, n)]) for m in methods for n in ac.sweep_steps(m)])
+                 for ci, c in enumerate(cases)]
     data = {"what": "speed against accuracy: error after 1 s vs cost per simulated second",
             "grid": ac.GRID, "sheet_size": ac.SHEET_SIZE, "reps": a.reps, "quick": a.quick,
             "machine": ac.cpu_model(), "timing_note": ac.timing_note(),
@@ -157,6 +175,71 @@ def run_all(a):
 
 
 # --- charts and tables ---------------------------------------------------------------------------
+def pareto_methods(ax, data, rows):
+    """Each method's runs as a line through its steps, the explicit method's double error
+    dashed; returns the double points (their errors widen the axis)."""
+    for m in data["methods"]:
+        pts = [(r["ms_per_s"], r["error"], r["steps_per_s"]) for r in rows
+               if r["method"] == m and not r["failed"] and r["ms_per_s"]]
+        nfail = sum(1 for r in rows if r["method"] == m and r["failed"])
+        nrun = sum(1 for r in rows if r["method"] == m)
+        label = f"{m}" + (f"  ({nfail} of {nrun} steps failed)" if nfail else "")
+        if pts:
+            pts.sort(key=lambda p: -p[2])
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=ac.MARKERS[m], color=ac.COLORS[m],
+                    lw=1, ms=7, label=label, alpha=0.9)
+            for p in pts:
+                ax.annotate(f"1/{p[2]}", (p[0], p[1]), textcoords="offset points", xytext=(4, 3),
+                            fontsize=6.5, color=ac.COLORS[m])
+        else:
+            ax.plot([], [], marker=ac.MARKERS[m], color=ac.COLORS[m], lw=0, label=label + " (all failed)")
+    dbl = sorted([(r["ms_per_s"], r["error_double"]) for r in rows if r["method"] == "explicit"
+                  and not r["failed"] and r.get("error_double") and r["ms_per_s"]])
+    if dbl:
+        ax.plot([p[0] for p in dbl], [p[1] for p in dbl], ls="--", lw=0.8, color=ac.COLORS["explicit"],
+                marker="o", mfc="none", ms=6, alpha=0.6,
+                label="explicit, error in double (reference backend) at the same cost")
+    return dbl
+
+
+def pareto_front(ax, ok):
+    """The Pareto front as a staircase through its circled runs."""
+    front = sorted([r for r in ok if r.get("pareto")], key=lambda r: r["ms_per_s"])
+    if not front:
+        return
+    xs, ys = [], []
+    for i, r in enumerate(front):
+        xs.append(r["ms_per_s"])
+        ys.append(r["error"])
+        if i + 1 < len(front):
+            xs.append(front[i + 1]["ms_per_s"])
+            ys.append(r["error"])
+    ax.plot(xs, ys, color="k", lw=2.2, alpha=0.35, zorder=0, label="Pareto front")
+    ax.scatter([r["ms_per_s"] for r in front], [r["error"] for r in front], s=160,
+               facecolors="none", edgecolors="k", lw=1.4, zorder=5)
+
+
+def pareto_axes(ax, c, errs):
+    """Budgets, the reference's uncertainty band, log axes, labels and legend of one case."""
+    for b in BUDGETS:
+        ax.axhline(b, color="grey", lw=0.6, ls=":")
+    if c.get("reference_change"):
+        ax.axhspan(1e-9, c["reference_change"], color="grey", alpha=0.12, lw=0)
+        ax.text(0.99, c["reference_change"] * 0.8, "below the reference's own uncertainty",
+                transform=ax.get_yaxis_transform(), ha="right", va="top", fontsize=8, color="grey")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    if errs:
+        ax.set_ylim(min(min(errs), c.get("reference_change") or 1) / 3, max(errs) * 3)
+    ax.set_xlabel("cost: ms of wall time per simulated second (fast backend, 2 threads; "
+                  "implicit: reference)", fontsize=9)
+    ax.set_ylabel("error after 1 s: RMS vertex distance / sheet diagonal")
+    ax.set_title(f"{c['scene']} scene, kappa {kname(c['kappa'])}: error against cost "
+                 f"(labels: step h)", fontsize=11)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9)
+
+
 def plot_pareto(data):
     import matplotlib
     matplotlib.use("Agg")
@@ -168,59 +251,10 @@ def plot_pareto(data):
     for kappa, cases in sorted(by_kappa.items()):
         fig, axes = plt.subplots(1, len(cases), figsize=(13.5 * len(cases), 7), squeeze=False)
         for ax, c in zip(axes[0], cases):
-            rows = c["rows"]
-            for m in data["methods"]:
-                pts = [(r["ms_per_s"], r["error"], r["steps_per_s"]) for r in rows
-                       if r["method"] == m and not r["failed"] and r["ms_per_s"]]
-                nfail = sum(1 for r in rows if r["method"] == m and r["failed"])
-                nrun = sum(1 for r in rows if r["method"] == m)
-                label = f"{m}" + (f"  ({nfail} of {nrun} steps failed)" if nfail else "")
-                if pts:
-                    pts.sort(key=lambda p: -p[2])
-                    ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=ac.MARKERS[m], color=ac.COLORS[m],
-                            lw=1, ms=7, label=label, alpha=0.9)
-                    for p in pts:
-                        ax.annotate(f"1/{p[2]}", (p[0], p[1]), textcoords="offset points", xytext=(4, 3),
-                                    fontsize=6.5, color=ac.COLORS[m])
-                else:
-                    ax.plot([], [], marker=ac.MARKERS[m], color=ac.COLORS[m], lw=0, label=label + " (all failed)")
-            dbl = sorted([(r["ms_per_s"], r["error_double"]) for r in rows if r["method"] == "explicit"
-                          and not r["failed"] and r.get("error_double") and r["ms_per_s"]])
-            if dbl:
-                ax.plot([p[0] for p in dbl], [p[1] for p in dbl], ls="--", lw=0.8, color=ac.COLORS["explicit"],
-                        marker="o", mfc="none", ms=6, alpha=0.6,
-                        label="explicit, error in double (reference backend) at the same cost")
-            ok = [r for r in rows if not r["failed"] and r["ms_per_s"]]
-            front = sorted([r for r in ok if r.get("pareto")], key=lambda r: r["ms_per_s"])
-            if front:
-                xs, ys = [], []
-                for i, r in enumerate(front):
-                    xs.append(r["ms_per_s"])
-                    ys.append(r["error"])
-                    if i + 1 < len(front):
-                        xs.append(front[i + 1]["ms_per_s"])
-                        ys.append(r["error"])
-                ax.plot(xs, ys, color="k", lw=2.2, alpha=0.35, zorder=0, label="Pareto front")
-                ax.scatter([r["ms_per_s"] for r in front], [r["error"] for r in front], s=160,
-                           facecolors="none", edgecolors="k", lw=1.4, zorder=5)
-            for b in BUDGETS:
-                ax.axhline(b, color="grey", lw=0.6, ls=":")
-            if c.get("reference_change"):
-                ax.axhspan(1e-9, c["reference_change"], color="grey", alpha=0.12, lw=0)
-                ax.text(0.99, c["reference_change"] * 0.8, "below the reference's own uncertainty",
-                        transform=ax.get_yaxis_transform(), ha="right", va="top", fontsize=8, color="grey")
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            errs = [r["error"] for r in ok] + [p[1] for p in dbl]
-            if errs:
-                ax.set_ylim(min(min(errs), c.get("reference_change") or 1) / 3, max(errs) * 3)
-            ax.set_xlabel("cost: ms of wall time per simulated second (fast backend, 2 threads; "
-                          "implicit: reference)", fontsize=9)
-            ax.set_ylabel("error after 1 s: RMS vertex distance / sheet diagonal")
-            ax.set_title(f"{c['scene']} scene, kappa {kname(kappa)}: error against cost "
-                         f"(labels: step h)", fontsize=11)
-            ax.grid(True, which="both", alpha=0.25)
-            ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), framealpha=0.9)
+            dbl = pareto_methods(ax, data, c["rows"])
+            ok = [r for r in c["rows"] if not r["failed"] and r["ms_per_s"]]
+            pareto_front(ax, ok)
+            pareto_axes(ax, c, [r["error"] for r in ok] + [p[1] for p in dbl])
         fig.text(0.01, 0.005, "16 x 16 grid; circled: Pareto-optimal; failed runs (exit 3) are not plotted.\n"
                  + data["timing_note"] + ".", fontsize=7.5, color="#444")
         fig.tight_layout(rect=(0, 0.04, 1, 1))
@@ -302,64 +336,75 @@ def write_tables(data):
          "fast backend with 2 threads for symplectic Euler and the approximate implicit method, "
          "the reference backend (1 thread) for Baraff-Witkin. 16 x 16 grid. " + data["timing_note"] + ".", ""]
     for c in data["cases"]:
-        L += [f"## {c['scene']}, kappa {kname(c['kappa'])}", "",
-              f"Reference: symplectic Euler at h = 1/{c['reference_steps_per_s']}; its own uncertainty "
-              f"(change when h was last halved) {fmt(c['reference_change'], 2)}.", "",
-              "| error budget | cheapest method | step h | cost (ms / simulated s) | error |",
-              "|---|---|---|---|---|"]
-        for b in BUDGETS:
-            r = c["budgets"][f"{b:g}"]
-            if r is None:
-                L.append(f"| {b:g} | none of the tested methods and steps | | | |")
-            else:
-                note = " (below the reference's uncertainty)" if c["reference_change"] and r["error"] < c["reference_change"] else ""
-                L.append(f"| {b:g} | {r['method']} | 1/{r['steps_per_s']} | {fmt(r['ms_per_s'])} | "
-                         f"{fmt(r['error'], 2)}{note} |")
-        anyr = cheapest(c["rows"], math.inf)
-        if anyr:
-            L.append(f"| any (bounded) | {anyr['method']} | 1/{anyr['steps_per_s']} | {fmt(anyr['ms_per_s'])} | "
-                     f"{fmt(anyr['error'], 2)} |")
-        L += ["", "<details><summary>every run</summary>", "",
-              "| method | h | error (costed backend) | error (double) | ms / simulated s | Pareto |",
-              "|---|---|---|---|---|---|"]
-        for r in c["rows"]:
-            err = f"failed (exit 3 at {r.get('time_reached') or 0:.2f} s)" if r["failed"] else fmt(r["error"], 2)
-            ed = "-" if r.get("exit_double") is None else ("failed" if r["exit_double"] else fmt(r["error_double"], 2))
-            L.append(f"| {r['method']} | 1/{r['steps_per_s']} | {err} | {ed} | {fmt(r['ms_per_s'])} | "
-                     f"{'yes' if r.get('pareto') else ''} |")
-        L += ["", "</details>", ""]
-    # float (fast backend) against double (reference backend) for the same method and step
-    pairs = [(c["name"], r) for c in data["cases"] for r in c["rows"]
-             if r.get("error") is not None and r.get("error_double") is not None]
-    if pairs:
-        ratio = [r["error"] / r["error_double"] for _, r in pairs]
-        same = sum(1 for q in ratio if abs(q - 1) < 0.1)
-        worse = [(n, r) for (n, r), q in zip(pairs, ratio) if q > 2]
-        both_fail = sum(1 for c in data["cases"] for r in c["rows"] if r["failed"] and r.get("exit_double"))
-        one_fail = sum(1 for c in data["cases"] for r in c["rows"] if r.get("exit_double") is not None
-                       and bool(r["failed"]) != bool(r["exit_double"]))
-        L += ["## Float against double", "",
-              f"Every symplectic Euler and approximate implicit run was repeated on the reference backend "
-              f"(double). Of {len(pairs)} runs that finished on both, the float error is within 10 % of the "
-              f"double one in {same}; it is more than twice the double one in {len(worse)}"
-              + (": " + ", ".join(f"{n} {r['method']} 1/{r['steps_per_s']} ({r['error']:.2g} vs {r['error_double']:.2g})"
-                                  for n, r in worse) if worse else "")
-              + f". {both_fail} runs failed on both backends, {one_fail} on one only.", "",
-              "Symplectic Euler, error on each backend:", "",
-              "| case | " + " | ".join(f"1/{n}" for n in ac.sweep_steps("explicit")) + " |",
-              "|---|" + "---|" * len(ac.sweep_steps("explicit"))]
-        for c in data["cases"]:
-            cells = []
-            for n in ac.sweep_steps("explicit"):
-                r = next((r for r in c["rows"] if r["method"] == "explicit" and r["steps_per_s"] == n), None)
-                if r is None or r["failed"]:
-                    cells.append("failed")
-                else:
-                    cells.append(f"{fmt(r['error'], 2)} / {fmt(r['error_double'], 2)}")
-            L.append(f"| {c['name']} (float / double) | " + " | ".join(cells) + " |")
-        L.append("")
+        L += case_table(c)
+    L += float_double_section(data)
     with open(os.path.join(ac.OUT, "pareto.md"), "w") as f:
         f.write("\n".join(L) + "\n")
+
+
+def case_table(c):
+    """pareto.md's section of one case: the cheapest run per budget, then every run."""
+    L = [f"## {c['scene']}, kappa {kname(c['kappa'])}", "",
+         f"Reference: symplectic Euler at h = 1/{c['reference_steps_per_s']}; its own uncertainty "
+         f"(change when h was last halved) {fmt(c['reference_change'], 2)}.", "",
+         "| error budget | cheapest method | step h | cost (ms / simulated s) | error |",
+         "|---|---|---|---|---|"]
+    for b in BUDGETS:
+        r = c["budgets"][f"{b:g}"]
+        if r is None:
+            L.append(f"| {b:g} | none of the tested methods and steps | | | |")
+        else:
+            note = " (below the reference's uncertainty)" if c["reference_change"] and r["error"] < c["reference_change"] else ""
+            L.append(f"| {b:g} | {r['method']} | 1/{r['steps_per_s']} | {fmt(r['ms_per_s'])} | "
+                     f"{fmt(r['error'], 2)}{note} |")
+    anyr = cheapest(c["rows"], math.inf)
+    if anyr:
+        L.append(f"| any (bounded) | {anyr['method']} | 1/{anyr['steps_per_s']} | {fmt(anyr['ms_per_s'])} | "
+                 f"{fmt(anyr['error'], 2)} |")
+    L += ["", "<details><summary>every run</summary>", "",
+          "| method | h | error (costed backend) | error (double) | ms / simulated s | Pareto |",
+          "|---|---|---|---|---|---|"]
+    for r in c["rows"]:
+        err = f"failed (exit 3 at {r.get('time_reached') or 0:.2f} s)" if r["failed"] else fmt(r["error"], 2)
+        ed = "-" if r.get("exit_double") is None else ("failed" if r["exit_double"] else fmt(r["error_double"], 2))
+        L.append(f"| {r['method']} | 1/{r['steps_per_s']} | {err} | {ed} | {fmt(r['ms_per_s'])} | "
+                 f"{'yes' if r.get('pareto') else ''} |")
+    return L + ["", "</details>", ""]
+
+
+def float_double_section(data):
+    """pareto.md's float (fast backend) against double (reference backend) for the same method
+    and step; nothing when no run finished on both."""
+    pairs = [(c["name"], r) for c in data["cases"] for r in c["rows"]
+             if r.get("error") is not None and r.get("error_double") is not None]
+    if not pairs:
+        return []
+    ratio = [r["error"] / r["error_double"] for _, r in pairs]
+    same = sum(1 for q in ratio if abs(q - 1) < 0.1)
+    worse = [(n, r) for (n, r), q in zip(pairs, ratio) if q > 2]
+    both_fail = sum(1 for c in data["cases"] for r in c["rows"] if r["failed"] and r.get("exit_double"))
+    one_fail = sum(1 for c in data["cases"] for r in c["rows"] if r.get("exit_double") is not None
+                   and bool(r["failed"]) != bool(r["exit_double"]))
+    L = ["## Float against double", "",
+         f"Every symplectic Euler and approximate implicit run was repeated on the reference backend "
+         f"(double). Of {len(pairs)} runs that finished on both, the float error is within 10 % of the "
+         f"double one in {same}; it is more than twice the double one in {len(worse)}"
+         + (": " + ", ".join(f"{n} {r['method']} 1/{r['steps_per_s']} ({r['error']:.2g} vs {r['error_double']:.2g})"
+                             for n, r in worse) if worse else "")
+         + f". {both_fail} runs failed on both backends, {one_fail} on one only.", "",
+         "Symplectic Euler, error on each backend:", "",
+         "| case | " + " | ".join(f"1/{n}" for n in ac.sweep_steps("explicit")) + " |",
+         "|---|" + "---|" * len(ac.sweep_steps("explicit"))]
+    for c in data["cases"]:
+        cells = []
+        for n in ac.sweep_steps("explicit"):
+            r = next((r for r in c["rows"] if r["method"] == "explicit" and r["steps_per_s"] == n), None)
+            if r is None or r["failed"]:
+                cells.append("failed")
+            else:
+                cells.append(f"{fmt(r['error'], 2)} / {fmt(r['error_double'], 2)}")
+        L.append(f"| {c['name']} (float / double) | " + " | ".join(cells) + " |")
+    return L + [""]
 
 
 def main():

@@ -104,10 +104,21 @@ def run_sim(binary, outdir, args, every, ref_area, force=False):
         with open(meta, "w") as fh:
             json.dump(r, fh)
         return r
+    r.update(series_measures(st))
+    if final:
+        r.update(shape_measures(final, ref_area, r["vertices0"]))
+    with open(meta, "w") as fh:
+        json.dump(r, fh)
+    return r
+
+
+def series_measures(st):
+    """run_sim's numbers from stats.csv: totals, first and final counts, late split rate,
+    cumulative series."""
     n = len(st["frame"])
     n0 = int(st["vertices"][0] - st["splits"][0] + st["restores"][0])
     late = st["splits"][2 * n // 3:]
-    r.update({
+    return {
         "frames_run": int(st["frame"][-1]),
         "splits": int(st["splits"].sum()),
         "restores": int(st["restores"].sum()),
@@ -120,23 +131,24 @@ def run_sim(binary, outdir, args, every, ref_area, force=False):
                    "splits": np.cumsum(st["splits"]).astype(int).tolist(),
                    "restores": np.cumsum(st["restores"]).astype(int).tolist(),
                    "vertices": st["vertices"].astype(int).tolist()},
-    })
-    if final:
-        V, F, L = load_obj(final)
-        c = crease_stats(V, F, L, ref_area=ref_area)
-        held = len(L)
-        reb = int(np.any(L >= n0, axis=1).sum()) if held else 0
-        used = V[np.unique(F)] if len(F) else V
-        ev = np.linalg.eigvalsh(np.cov((used - used.mean(0)).T))
-        r.update({"aspect": float(np.sqrt(max(ev[0], 0) / ev[-1])) if ev[-1] > 0 else 0.0,
-                  "crease": c["crease_norm"], "crease_length": c["crease_length"],
-                  "rms": c["rms_radius_norm"], "mean_dihedral": c["mean_dihedral_deg"],
-                  "held": held, "rebreaks": reb,
-                  "rebreak_frac": reb / held if held else 0.0,
-                  "obj_frame": os.path.basename(final)})
-    with open(meta, "w") as fh:
-        json.dump(r, fh)
-    return r
+    }
+
+
+def shape_measures(final, ref_area, n0):
+    """run_sim's numbers from the last mesh: aspect, crease, RMS radius, held and re-broken
+    springs (an endpoint >= n0, the original vertex count, marks a second-generation break)."""
+    V, F, L = load_obj(final)
+    c = crease_stats(V, F, L, ref_area=ref_area)
+    held = len(L)
+    reb = int(np.any(L >= n0, axis=1).sum()) if held else 0
+    used = V[np.unique(F)] if len(F) else V
+    ev = np.linalg.eigvalsh(np.cov((used - used.mean(0)).T))
+    return {"aspect": float(np.sqrt(max(ev[0], 0) / ev[-1])) if ev[-1] > 0 else 0.0,
+            "crease": c["crease_norm"], "crease_length": c["crease_length"],
+            "rms": c["rms_radius_norm"], "mean_dihedral": c["mean_dihedral_deg"],
+            "held": held, "rebreaks": reb,
+            "rebreak_frac": reb / held if held else 0.0,
+            "obj_frame": os.path.basename(final)}
 
 
 def run_many(binary, jobs, specs):
@@ -258,47 +270,14 @@ def sweep_figure(path, title, pname, values, labels, summaries, runs_by_col, cla
     gs = GridSpec(3, ncol, figure=fig, height_ratios=[cw, 1.35, 2.5], hspace=0.12,
                   left=0.06, right=0.98, top=1 - 0.75 / H, bottom=0.8 / H)
     fig.suptitle(title, fontsize=13, y=1 - 0.12 / H, va="top")
-    radius = panel_view([r.get("obj") for r in seed1], ELEV if elev is None else elev)
+    elev = ELEV if elev is None else elev
+    radius = panel_view([r.get("obj") for r in seed1], elev)
     for k, (lab, s, r1) in enumerate(zip(labels, summaries, seed1)):
-        ax = fig.add_subplot(gs[0, k], projection="3d", proj_type="ortho")
-        if r1.get("obj"):
-            V, F, L = load_obj(r1["obj"])
-            render_mesh(V, F, L, ax=ax, elev=ELEV if elev is None else elev, azim=AZIM,
-                        radius=radius, fill=0.95)
-        ax.set_title(lab, fontsize=11, pad=0)
-        tax = fig.add_subplot(gs[1, k])
-        tax.axis("off")
-        lines = [f"splits    {fmt(s, 'splits')}",
-                 f"restores  {fmt(s, 'restores')}",
-                 f"vertices  {fmt(s, 'vertices')}",
-                 f"crease    {fmt(s, 'crease', 1)}"]
-        for key, name, nd in extra_lines:
-            lines.append(f"{name:<9} {fmt(s, key, nd)}")
-        note = f"{s['n']} seeds"
-        if s["n_ok"] < s["n"]:
-            note += f", {s['n'] - s['n_ok']} UNSTABLE (frames {s['failed_at']})"
-        if not r1.get("ok"):
-            note = f"seed 1 unstable at frame {r1.get('frames_run')} (last frame shown); " + note
-        lines.append(note)
-        tax.text(0.5, 1.0, "\n".join(lines), ha="center", va="top", family="monospace",
-                 multialignment="left",
-                 fontsize=8.6, color="black" if s["n_ok"] == s["n"] else "firebrick",
-                 transform=tax.transAxes)
+        sweep_column(fig, gs, k, lab, s, r1, extra_lines, elev, radius)
     sub = GridSpecFromSubplotSpec(1, 3, subplot_spec=gs[2, :], wspace=0.3)
     cmap = plt.get_cmap("viridis")
     cols = [cmap(i / max(1, ncol - 1) * 0.85) for i in range(ncol)]
-    for j, key in enumerate(["splits", "restores"]):
-        ax = fig.add_subplot(sub[0, j])
-        for lab, s, c, runs in zip(labels, summaries, cols, runs_by_col):
-            for r in runs:
-                if "series" in r:
-                    ax.plot(r["series"]["time"], r["series"][key], color=c, lw=0.8,
-                            alpha=0.7, label=lab if r is runs[0] else None)
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel(f"cumulative {key}")
-        ax.grid(alpha=0.3)
-        if j == 0:
-            ax.legend(fontsize=7, frameon=False)
+    sweep_series(fig, sub, labels, cols, runs_by_col)
     ax = fig.add_subplot(sub[0, 2])
     for x, s, c in zip(values, summaries, cols):
         if claim_metric in s:
@@ -318,6 +297,50 @@ def sweep_figure(path, title, pname, values, labels, summaries, runs_by_col, cla
              "curves: every seed", ha="center", va="bottom", fontsize=8, color="0.3")
     fig.savefig(path, dpi=95, facecolor="white")
     plt.close(fig)
+
+
+def sweep_column(fig, gs, k, lab, s, r1, extra_lines, elev, radius):
+    """Column k of a sweep figure: seed 1's render and the setting's numbers under it (red when
+    some seeds went unstable)."""
+    ax = fig.add_subplot(gs[0, k], projection="3d", proj_type="ortho")
+    if r1.get("obj"):
+        V, F, L = load_obj(r1["obj"])
+        render_mesh(V, F, L, ax=ax, elev=elev, azim=AZIM, radius=radius, fill=0.95)
+    ax.set_title(lab, fontsize=11, pad=0)
+    tax = fig.add_subplot(gs[1, k])
+    tax.axis("off")
+    lines = [f"splits    {fmt(s, 'splits')}",
+             f"restores  {fmt(s, 'restores')}",
+             f"vertices  {fmt(s, 'vertices')}",
+             f"crease    {fmt(s, 'crease', 1)}"]
+    for key, name, nd in extra_lines:
+        lines.append(f"{name:<9} {fmt(s, key, nd)}")
+    note = f"{s['n']} seeds"
+    if s["n_ok"] < s["n"]:
+        note += f", {s['n'] - s['n_ok']} UNSTABLE (frames {s['failed_at']})"
+    if not r1.get("ok"):
+        note = f"seed 1 unstable at frame {r1.get('frames_run')} (last frame shown); " + note
+    lines.append(note)
+    tax.text(0.5, 1.0, "\n".join(lines), ha="center", va="top", family="monospace",
+             multialignment="left",
+             fontsize=8.6, color="black" if s["n_ok"] == s["n"] else "firebrick",
+             transform=tax.transAxes)
+
+
+def sweep_series(fig, sub, labels, cols, runs_by_col):
+    """Cumulative splits and restores of every seed, coloured by setting."""
+    for j, key in enumerate(["splits", "restores"]):
+        ax = fig.add_subplot(sub[0, j])
+        for lab, c, runs in zip(labels, cols, runs_by_col):
+            for r in runs:
+                if "series" in r:
+                    ax.plot(r["series"]["time"], r["series"][key], color=c, lw=0.8,
+                            alpha=0.7, label=lab if r is runs[0] else None)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel(f"cumulative {key}")
+        ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=7, frameon=False)
 
 
 # ----------------------------------------------------------------------------- Fig 6
@@ -393,13 +416,28 @@ def woody(binary, work, out, frames, mesh, extra, every, quick):
     if r.get("ok"):
         objs.append((r["frames_run"], os.path.join(d, "final.obj")))
     objs = sorted(dict(objs).items())
-    elev, azim = 55.0, -75.0
     from render import camera_frame
-    eye, up, right = camera_frame(elev, azim)
-    c0 = 0.5 * (Vi.min(0) + Vi.max(0))
-    P = Vi - c0
-    radius = 1.02 * max(np.abs(P @ right).max(), np.abs(P @ up).max())
+    view = {"elev": 55.0, "azim": -75.0}
+    eye, up, right = camera_frame(view["elev"], view["azim"])
+    view["center"] = 0.5 * (Vi.min(0) + Vi.max(0))
+    P = Vi - view["center"]
+    view["radius"] = 1.02 * max(np.abs(P @ right).max(), np.abs(P @ up).max())
     st = read_stats(os.path.join(d, "stats.csv"))
+    c = woody_strip(os.path.join(out, "woody_strip.png"), objs, st, view, (Vi, Fi, area0), r)
+    gif = os.path.join(out, "woody.gif")
+    try:
+        from PIL import Image  # noqa: F401
+    except ImportError:
+        print("figures: python3-pil missing, no GIF", file=sys.stderr)
+        return r, c
+    woody_gif(gif, objs[::2 if quick else 1], view, int(1000 * every * (2 if quick else 1) / 60 * 2))
+    return r, c
+
+
+def woody_strip(path, objs, st, view, input_mesh, r):
+    """Six frames evenly over the run, each with its time and counts; returns the last one's
+    crease statistics."""
+    Vi, Fi, area0 = input_mesh
     cums = np.cumsum(st["splits"])
     cumr = np.cumsum(st["restores"])
 
@@ -410,7 +448,6 @@ def woody(binary, work, out, frames, mesh, extra, every, quick):
         return (f"t = {fn / 60:.1f} s\nsplits {int(cums[i])}, restores {int(cumr[i])}\n"
                 f"vertices {int(st['vertices'][i])}")
 
-    # strip: 6 frames evenly over the run
     want = np.linspace(0, objs[-1][0], 6)
     pick = []
     for w in want:
@@ -422,7 +459,7 @@ def woody(binary, work, out, frames, mesh, extra, every, quick):
         ax = fig.add_axes([k / len(pick), 0.16, 1 / len(pick), 0.78], projection="3d",
                           proj_type="ortho")
         V, F, L = load_obj(o)
-        render_mesh(V, F, L, ax=ax, elev=elev, azim=azim, center=c0, radius=radius, fill=0.97)
+        render_mesh(V, F, L, ax=ax, fill=0.97, **view)
         fig.text((k + 0.5) / len(pick), 0.15, label(fn), ha="center", va="top", fontsize=8.5)
     c = crease_stats(*load_obj(pick[-1][1]), ref_area=area0)
     fig.suptitle(f"woody.obj ({len(Fi)} triangles, ~{np.ptp(Vi[:, 0]):.0f} units wide) in the "
@@ -430,31 +467,27 @@ def woody(binary, work, out, frames, mesh, extra, every, quick):
                  f"RMS radius {c['rms_radius_norm']:.3f} sqrt(A0)"
                  + ("" if r.get("ok") else f" — UNSTABLE at frame {r.get('frames_run')}"),
                  fontsize=10)
-    fig.savefig(os.path.join(out, "woody_strip.png"), dpi=100, facecolor="white")
+    fig.savefig(path, dpi=100, facecolor="white")
     plt.close(fig)
-    # GIF: every written frame, rendered small, assembled with Pillow
-    gif = os.path.join(out, "woody.gif")
-    try:
-        from PIL import Image
-    except ImportError:
-        print("figures: python3-pil missing, no GIF", file=sys.stderr)
-        return r, c
+    return c
+
+
+def woody_gif(path, objs, view, duration_ms):
+    """Every given frame rendered small, assembled with Pillow (duration_ms a frame)."""
+    from PIL import Image
     imgs = []
-    step = 2 if quick else 1
-    for fn, o in objs[::step]:
+    for fn, o in objs:
         fig = plt.figure(figsize=(4.0, 4.0), facecolor="white")
         ax = fig.add_axes([0, 0, 1, 1], projection="3d", proj_type="ortho")
         V, F, L = load_obj(o)
-        render_mesh(V, F, L, ax=ax, elev=elev, azim=azim, center=c0, radius=radius, fill=0.97)
+        render_mesh(V, F, L, ax=ax, fill=0.97, **view)
         fig.text(0.03, 0.03, f"t = {fn / 60:.2f} s", fontsize=9)
         fig.canvas.draw()
         im = Image.fromarray(np.asarray(fig.canvas.buffer_rgba())[:, :, :3].copy())
         plt.close(fig)
         imgs.append(im.quantize(colors=64, method=Image.Quantize.MEDIANCUT))
-    dur = int(1000 * every * step / 60 * 2)  # half speed
-    imgs[0].save(gif, save_all=True, append_images=imgs[1:], duration=dur, loop=0,
+    imgs[0].save(path, save_all=True, append_images=imgs[1:], duration=duration_ms, loop=0,
                  optimize=True)
-    return r, c
 
 
 # ----------------------------------------------------------------------------- hero

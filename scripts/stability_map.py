@@ -89,6 +89,52 @@ def one(scene, method, kappa, n, work):
     return r
 
 
+def explicit_limit(c):
+    """The explicit method's limit of theory on the uniform grid, h = 2 / (c sqrt kappa), as a
+    curve in the map's cell coordinates (x: cell of log h, y: cell of log kappa), half a cell
+    beyond the tested ends."""
+    xs_h = np.log(1.0 / np.array(STEPS, dtype=float))  # increasing
+    # cell centres at log h of each step; extrapolated linearly half a cell beyond the ends
+    cx = np.arange(len(STEPS)) + 0.5
+    xs_ext = np.concatenate([[xs_h[0] - 0.5 * (xs_h[1] - xs_h[0])], xs_h, [xs_h[-1] + 0.5 * (xs_h[-1] - xs_h[-2])]])
+    cx_ext = np.concatenate([[0.0], cx, [len(STEPS)]])
+    ks_ext = np.logspace(np.log10(KAPPAS[0]) - 0.5, np.log10(KAPPAS[-1]) + 0.5, 300)
+    hs = 2 / (c * np.sqrt(ks_ext))
+    xi = np.interp(np.log(hs), xs_ext, cx_ext, left=np.nan, right=np.nan)
+    ky = np.log10(np.array(KAPPAS, dtype=float))
+    yj = (np.log10(ks_ext) - ky[0]) / (ky[1] - ky[0]) + 0.5
+    return xi, yj
+
+
+def method_map(ax, m, cells, limit):
+    """One method's panel: a cell per (step, kappa), green bounded, red failed (labelled with
+    the time it reached), and the explicit limit dashed."""
+    from matplotlib.patches import Rectangle
+    for i, n in enumerate(STEPS):              # x: h grows to the right (STEPS: 1/h falling)
+        for j, k in enumerate(KAPPAS):         # y: kappa grows upwards
+            r = cells.get((m, k, n))
+            if r is None:
+                continue
+            col = "#7fc97f" if r["bounded"] else "#f0027f"
+            ax.add_patch(Rectangle((i, j), 1, 1, facecolor=col, edgecolor="white", lw=2))
+            if not r["bounded"]:
+                t = r.get("time_reached")
+                ax.text(i + 0.5, j + 0.5, f"{t:.2f} s" if t is not None else "x", ha="center", va="center",
+                        fontsize=7.5, color="white")
+    ax.plot(*limit, color="k", lw=1.5, ls="--", label="explicit limit 2/omega_max (uniform grid)")
+    ax.set_xlim(0, len(STEPS))
+    ax.set_ylim(0, len(KAPPAS))
+    ax.set_xticks(np.arange(len(STEPS)) + 0.5)
+    ax.set_xticklabels([f"1/{n}" for n in STEPS], fontsize=8)
+    ax.set_yticks(np.arange(len(KAPPAS)) + 0.5)
+    ax.set_yticklabels([kname(k) for k in KAPPAS], fontsize=8)
+    ax.set_xlabel("step h (s)")
+    ax.set_ylabel("kappa")
+    nb = sum(1 for k in KAPPAS for n in STEPS if cells.get((m, k, n), {}).get("bounded"))
+    ax.set_title(f"{m}: {METHODS[m][1]}\n{nb} of {len(KAPPAS) * len(STEPS)} bounded", fontsize=9.5)
+    ax.set_aspect("equal")
+
+
 def plot(data, scene, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -99,46 +145,9 @@ def plot(data, scene, path):
     nrow = (len(methods) + ncol - 1) // ncol
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.6 * nrow), squeeze=False)
     cells = {(r["method"], r["kappa"], r["steps_per_s"]): r for r in data["runs"] if r["scene"] == scene}
-    c = data["omega_coefficient"]
+    limit = explicit_limit(data["omega_coefficient"])
     for ax, m in zip(axes.flat, methods):
-        for i, n in enumerate(STEPS):              # x: h grows to the right (STEPS: 1/h falling)
-            for j, k in enumerate(KAPPAS):         # y: kappa grows upwards
-                r = cells.get((m, k, n))
-                if r is None:
-                    continue
-                col = "#7fc97f" if r["bounded"] else "#f0027f"
-                ax.add_patch(Rectangle((i, j), 1, 1, facecolor=col, edgecolor="white", lw=2))
-                if not r["bounded"]:
-                    t = r.get("time_reached")
-                    ax.text(i + 0.5, j + 0.5, f"{t:.2f} s" if t is not None else "x", ha="center", va="center",
-                            fontsize=7.5, color="white")
-        # explicit limit of theory on the uniform grid: h = 2 / (c sqrt kappa), in cell coordinates
-        ks = np.logspace(2, 7, 200)
-        hs = 2 / (c * np.sqrt(ks))
-        xs_h = np.log(1.0 / np.array(STEPS, dtype=float))  # increasing
-        # cell centres at log h of each step; extrapolated linearly half a cell beyond the ends
-        cx = np.arange(len(STEPS)) + 0.5
-        xs_ext = np.concatenate([[xs_h[0] - 0.5 * (xs_h[1] - xs_h[0])], xs_h, [xs_h[-1] + 0.5 * (xs_h[-1] - xs_h[-2])]])
-        cx_ext = np.concatenate([[0.0], cx, [len(STEPS)]])
-        xi = np.interp(np.log(hs), xs_ext, cx_ext, left=np.nan, right=np.nan)
-        yj = np.interp(np.log(ks), np.log(KAPPAS), np.arange(len(KAPPAS)) + 0.5)
-        ks_ext = np.logspace(np.log10(KAPPAS[0]) - 0.5, np.log10(KAPPAS[-1]) + 0.5, 300)
-        hs = 2 / (c * np.sqrt(ks_ext))
-        xi = np.interp(np.log(hs), xs_ext, cx_ext, left=np.nan, right=np.nan)
-        ky = np.log10(np.array(KAPPAS, dtype=float))
-        yj = (np.log10(ks_ext) - ky[0]) / (ky[1] - ky[0]) + 0.5
-        ax.plot(xi, yj, color="k", lw=1.5, ls="--", label="explicit limit 2/omega_max (uniform grid)")
-        ax.set_xlim(0, len(STEPS))
-        ax.set_ylim(0, len(KAPPAS))
-        ax.set_xticks(np.arange(len(STEPS)) + 0.5)
-        ax.set_xticklabels([f"1/{n}" for n in STEPS], fontsize=8)
-        ax.set_yticks(np.arange(len(KAPPAS)) + 0.5)
-        ax.set_yticklabels([kname(k) for k in KAPPAS], fontsize=8)
-        ax.set_xlabel("step h (s)")
-        ax.set_ylabel("kappa")
-        nb = sum(1 for k in KAPPAS for n in STEPS if cells.get((m, k, n), {}).get("bounded"))
-        ax.set_title(f"{m}: {METHODS[m][1]}\n{nb} of {len(KAPPAS) * len(STEPS)} bounded", fontsize=9.5)
-        ax.set_aspect("equal")
+        method_map(ax, m, cells, limit)
     for ax in list(axes.flat)[len(methods):]:
         ax.axis("off")
     handles = [Rectangle((0, 0), 1, 1, facecolor="#7fc97f"), Rectangle((0, 0), 1, 1, facecolor="#f0027f"),
