@@ -39,6 +39,11 @@
 //     iteration's time is the mean frame time of a fixed stretch of the crumple, long enough
 //     to hold the fast backend's occasional relayout at its usual rate; the batch is fixed so
 //     that every backend, thread count and revision times the same frames.
+//   * BM_Frame and BM_Default also report `longest_ms`, the longest single frame of an
+//     iteration's batch (each frame timed by one clock read after it; the median over the
+//     repetition's iterations, which all simulate the same frames): the frame a real-time loop
+//     must fit. In the fast backend it is the frame that relayouts, when the batch holds one
+//     (about once every 8-11 frames at the prepared point, bench_common.cpp).
 //   * The reported cpu_time is not meaningful (it includes the untimed clone and warm-up, on
 //     the main thread only); use real_time, which is the manual time.
 // Threads: tbb::global_control(max_allowed_parallelism, T) for the whole benchmark function,
@@ -179,6 +184,7 @@ void set_floor_counters(benchmark::State& state, const Simulator& sim, int subst
 /// What one iteration timed: k frames after an untimed warm-up frame, on a fresh clone.
 struct Batch {
   double seconds = 0;
+  double longest = 0;  ///< the longest single frame (api_batch only)
   long splits = 0, restores = 0;
 };
 
@@ -188,13 +194,19 @@ Batch api_batch(const Prepared& p, int k) {
   Sheet sheet = SheetAccess::adopt(p.sim->clone(), params, p.size);  // untimed: restore
   sheet.step(params.frame_dt);                                        // untimed warm-up frame
   Batch b;
+  // One clock read a frame: each frame's time is the gap between two reads, and the batch's
+  // the gap between the first and the last, as with two reads around the loop.
   const Clock::time_point t0 = Clock::now();
+  Clock::time_point before = t0;
   for (int f = 0; f < k; ++f) {
     const FrameEvents ev = sheet.step(params.frame_dt);
+    const Clock::time_point after = Clock::now();
+    b.longest = std::max(b.longest, seconds_between(before, after));
+    before = after;
     b.splits += ev.splits;
     b.restores += ev.restores;
   }
-  b.seconds = seconds_between(t0, Clock::now());
+  b.seconds = seconds_between(t0, before);
   return b;  // the sheet is destroyed after the clock stopped
 }
 
@@ -230,6 +242,7 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   const long want_splits = frozen ? 0 : p.splits, want_restores = frozen ? 0 : p.restores;
   FrameTally tally;
   long mismatch = 0;
+  std::vector<double> longest;  // each iteration's longest frame (BM_Frame, BM_Default)
   for (auto _ : state) {
     Batch b;
     try {
@@ -239,6 +252,7 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
       break;
     }
     tally.add_batch(state, b.seconds, k);
+    if (timed == Timed::Api) longest.push_back(b.longest);
     tally.splits += b.splits;
     tally.restores += b.restores;
     mismatch += (b.splits != want_splits || b.restores != want_restores);
@@ -246,6 +260,10 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);
   if (frozen) set_floor_counters(state, *p.sim, p.substeps);
+  if (!longest.empty()) {  // the median iteration's: every iteration simulates the same frames
+    std::nth_element(longest.begin(), longest.begin() + longest.size() / 2, longest.end());
+    state.counters["longest_ms"] = 1e3 * longest[longest.size() / 2];
+  }
 }
 
 // BM_Pair/<backend>/2/<N>: the same frames as BM_Frame on 1 thread and on 2, back to back in

@@ -3,8 +3,9 @@ roof leaves out the random-line kernel, BM_Stream/gather, and an event's floor i
 bytes at that kernel's rate on the event's thread count), BM_Pair's speed-up (class Pairs), the
 busy-machine verdict (class MachineLoad), the cost per vertex against N = 128 (class
 PerVertex), the frozen step on a fresh layout beside the prepared one (class FrozenFresh), the
-first touch of memory against streaming (class FirstTouch), the CPU line (class CpuLine) and the
-CPUs' cache-line round trip (class CoreToCore).
+first touch of memory against streaming (class FirstTouch), the CPU line (class CpuLine), the
+CPUs' cache-line round trip (class CoreToCore), BM_Pair by placement (class PairPlacements) and
+the frame budget by the longest frame (class LongestFrame).
 Wrong code the rooflines catch: the gather kernel taken as the roof (it is the lowest, so every
 pass would look closer to memory-bound), the floor computed from the streaming rate or from the
 other thread count's line rate, bytes read as lines; each class names its own."""
@@ -250,3 +251,28 @@ class FirstTouch(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class LongestFrame(unittest.TestCase):
+    """The budget table by `longest_ms`. Wrong code this catches: the budget judged by the
+    median again (N = 256's 20 ms median fits 30 fps, its 36 ms longest frame does not), the
+    largest N taken regardless of the budget, a row for a configuration without the counter
+    (Bullet here), the table printed for a run from before the counter."""
+
+    def test_the_longest_frame_decides(self):
+        b = {}
+        for n, ms, longest in [(128, 5.0, 8.0), (256, 20.0, 36.0), (512, 100.0, 160.0)]:
+            name = f"BM_Frame/fast/2/{n}/manual_time"
+            b[name] = bench(name, ms, longest_ms=longest, vertices=n * n)
+        b["BM_Frame/bullet/1/128/manual_time"] = bench("BM_Frame/bullet/1/128/manual_time", 7.0, vertices=16384)
+        lines = bench_report.budget_section(bench_report.frame_series(b), {})
+        longest = lines[lines.index("| configuration | 60 fps (<= 16.7 ms) | 30 fps (<= 33.3 ms) |", 5):]
+        rows = [line for line in longest if line.startswith("| fast") or line.startswith("| Bullet")]
+        self.assertEqual(rows, ["| fast, 2 threads | N=128: longest 8 ms, median 5 ms | N=128: longest 8 ms, median 5 ms |"])
+        # The median table above it still says N = 256 fits 30 fps.
+        self.assertTrue(any(line.startswith("| fast, 2 threads |") and "N=256" in line for line in lines[:8]), lines)
+
+    def test_no_table_without_the_counter(self):
+        b = {"BM_Frame/fast/2/128/manual_time": bench("BM_Frame/fast/2/128/manual_time", 5.0, vertices=16384)}
+        lines = bench_report.budget_section(bench_report.frame_series(b), {})
+        self.assertFalse(any("longest" in line for line in lines))
