@@ -15,9 +15,11 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "sim/backends.h"
 
@@ -59,6 +61,13 @@ void for_each_config(F f) {
 /// Frames timed back to back in one iteration, fixed per N (never adapted to the measured
 /// speed) so that every backend, thread count and revision times exactly the same frames.
 int frames_per_iteration(int n);
+
+/// The middle value of a non-empty v (the upper one of two for an even count): what one
+/// repetition reports of per-iteration or per-pair samples.
+inline double middle_value(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
 
 using Clock = std::chrono::steady_clock;
 inline double seconds_between(Clock::time_point a, Clock::time_point b) {

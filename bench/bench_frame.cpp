@@ -260,10 +260,8 @@ void BM_Frame(benchmark::State& state, const std::string& backend, int threads, 
   tally.set_counters(state, p.vertices, p.edges);
   state.counters["mismatch"] = double(mismatch);
   if (frozen) set_floor_counters(state, *p.sim, p.substeps);
-  if (!longest.empty()) {  // the median iteration's: every iteration simulates the same frames
-    std::nth_element(longest.begin(), longest.begin() + longest.size() / 2, longest.end());
-    state.counters["longest_ms"] = 1e3 * longest[longest.size() / 2];
-  }
+  // The median iteration's: every iteration simulates the same frames.
+  if (!longest.empty()) state.counters["longest_ms"] = 1e3 * middle_value(longest);
 }
 
 // BM_Pair/<backend>/2/<N>: the same frames as BM_Frame on 1 thread and on 2, back to back in
@@ -310,8 +308,7 @@ void BM_Pair(benchmark::State& state, const std::string& backend, int n) {
   state.counters["vertices"] = two->vertices;
   state.counters["mismatch"] = double(mismatch);
   if (!trips_ns.empty() && trips_ns.size() == std::size_t(pairs)) {
-    std::nth_element(trips_ns.begin(), trips_ns.begin() + trips_ns.size() / 2, trips_ns.end());
-    const double median_ns = trips_ns[trips_ns.size() / 2];
+    const double median_ns = middle_value(trips_ns);
     state.counters["round_trip_ns"] = median_ns;
     state.counters["near_placement"] = median_ns < kNearRoundTripNs ? 1.0 : 0.0;
   }

@@ -524,12 +524,12 @@ def events_section(benches):
 def pair_group(b, reps):
     """(1-thread ms, 2-thread ms, speed-up, lowest, highest, repetitions) over the repetitions
     `reps` (indices) of one BM_Pair benchmark, or None when none of them has a speed-up."""
-    at = lambda key, i: b.counters.get(key, [])[i] if i < len(b.counters.get(key, [])) else float("nan")
-    reps = [i for i in reps if math.isfinite(at("speedup", i)) and at("speedup", i) > 0]
+    c = b.counters  # BM_Pair sets ms_1t, ms_2t and speedup in every repetition
+    reps = [i for i in reps if math.isfinite(c["speedup"][i]) and c["speedup"][i] > 0]
     if not reps:
         return None
-    ratios = [at("speedup", i) for i in reps]
-    return (statistics.median(at("ms_1t", i) for i in reps), statistics.median(at("ms_2t", i) for i in reps),
+    ratios = [c["speedup"][i] for i in reps]
+    return (statistics.median(c["ms_1t"][i] for i in reps), statistics.median(c["ms_2t"][i] for i in reps),
             statistics.median(ratios), min(ratios), max(ratios), len(reps))
 
 
