@@ -9,7 +9,8 @@
 namespace crumple::bench {
 
 /// A round trip below this: the two CPUs share a last-level cache ("near"); above it they do not
-/// ("far"). The Zen 5 VM's placements measured 80-184 and 423-2,700 ns (docs/PERFORMANCE.md).
+/// ("far"). It lies in the gap between the two placements a VM's host gave its vCPUs
+/// (docs/PERFORMANCE.md, "The Zen 5 VM's two vCPUs move between near and far placements").
 inline constexpr double kNearRoundTripNs = 250.0;
 
 /// Round trips BM_Pair samples before each pair: a fraction of a millisecond near, about a
