@@ -84,12 +84,14 @@ double topology_apply(const LayoutSizes& s, double events) {
   return adapt_test(s) + s.edges * 2 * kU8 + events * event(s);
 }
 
-// relayout reads every array of every element and writes it permuted: twice the whole state
-// (not the step's scratch, which the next step rewrites: no EdgeOut).
+// A relayout's two phases (layout.h) read every array of every element and write it permuted,
+// not the step's scratch, which the next step rewrites (no EdgeOut, no areas), and each renames
+// the other kinds' entries in place: phase one the edge records and faces, phase two three of
+// the four pools (not the neighbours). Split records are left out.
 double layout(const LayoutSizes& s) {
-  const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t);
-  const double edge = kEdge + 2 * kI;
-  const double triangle = kFace + kU8 + kF4 + 2 * kI;
+  const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t) + kI * (s.room_e + 2 * s.room_t);
+  const double edge = 2 * kEdge + 2 * kI;
+  const double triangle = 2 * kFace + kU8 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
 }
 }  // namespace

@@ -4,9 +4,11 @@
 // clones it, sets one fraction, runs one untimed warm-up frame and times FRAMES frames; the runs
 // of one round take the fractions in a rotated order, so that every fraction meets the machine's
 // load at every position. Per run: the mean frame, each pass's share of it (the passes'
-// own timers), the relayouts and the longest one (a frame that relayouts is that much longer:
-// the hitch an engine sees), and the page faults (first touches of memory, which cost some
-// microseconds each on a VM: docs/PERFORMANCE.md) a frame and in the frames that relayout.
+// own timers), the frames that ran a relayout phase (a relayout's two phases run in consecutive
+// steps, layout.h: two frames of the paper's one step a frame) and the longest phase of a run, the
+// longest frame of a run (the hitch an engine sees), and the page faults (first touches of
+// memory, which cost some microseconds each on a VM: docs/PERFORMANCE.md) a frame and in the
+// frames that relayout.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
 #include <sys/resource.h>
@@ -34,8 +36,9 @@ using crumple::fast::Pass;
 struct RunResult {
   double frame_ms = 0;                          ///< mean over the timed frames
   double pass_ms[int(Pass::kCount)] = {};       ///< each pass's mean per frame
-  int relayouts = 0;
-  double longest_relayout_ms = 0;
+  int layout_frames = 0;         ///< frames that ran a relayout phase
+  double longest_layout_ms = 0;  ///< the longest relayout phase
+  double longest_frame_ms = 0;
   double faults = 0;           ///< minor page faults a frame (mean)
   double relayout_faults = 0;  ///< minor page faults a frame that relayouts (mean; 0 if none)
 };
@@ -60,18 +63,20 @@ RunResult run(const FastSimulator& prepared, const crumple::Params& params, int 
     const double faults_before = minor_faults();
     const auto t0 = std::chrono::steady_clock::now();
     crumple::run_frame(sim, params, first_frame + f);
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double frame = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    seconds += frame;
+    r.longest_frame_ms = std::max(r.longest_frame_ms, 1e3 * frame);
     const double faults = minor_faults() - faults_before;
     r.faults += faults;
     const double layout = sim.pass_seconds()[int(Pass::Layout)] - layout_before;
     if (layout > 0) {
-      ++r.relayouts, r.relayout_faults += faults;
-      r.longest_relayout_ms = std::max(r.longest_relayout_ms, 1e3 * layout);
+      ++r.layout_frames, r.relayout_faults += faults;
+      r.longest_layout_ms = std::max(r.longest_layout_ms, 1e3 * layout);
     }
   }
   r.frame_ms = 1e3 * seconds / frames;
   r.faults /= frames;
-  if (r.relayouts > 0) r.relayout_faults /= r.relayouts;
+  if (r.layout_frames > 0) r.relayout_faults /= r.layout_frames;
   for (int k = 0; k < int(Pass::kCount); ++k) r.pass_ms[k] = 1e3 * (sim.pass_seconds()[k] - before[k]) / frames;
   return r;
 }
@@ -84,9 +89,10 @@ double median(std::vector<double> v) {
 
 /// Per fraction, the medians over the rounds of each run's figures.
 void print_medians(const std::map<double, std::vector<RunResult>>& results, int rounds) {
-  std::printf("\nmedians over %d rounds (ms a frame; relayout: the longest of a run; faults: page faults a frame)\n",
+  std::printf("\nmedians over %d rounds (ms a frame; longest: a run's longest frame; layout_frames: frames that ran "
+              "a relayout phase; phase: a run's longest one; faults: page faults a frame)\n",
               rounds);
-  std::printf("%-9s %8s %9s %10s", "fraction", "frame", "relayouts", "relayout");
+  std::printf("%-9s %8s %8s %13s %8s", "fraction", "frame", "longest", "layout_frames", "phase");
   for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14s", to_string(Pass(p)));
   std::printf(" %8s %15s\n", "faults", "relayout_faults");
   for (const auto& [fraction, runs] : results) {
@@ -95,9 +101,10 @@ void print_medians(const std::map<double, std::vector<RunResult>>& results, int 
       for (const RunResult& r : runs) v.push_back(get(r));
       return median(v);
     };
-    std::printf("%-9g %8.2f %9.1f %10.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
-                med([](const RunResult& r) { return double(r.relayouts); }),
-                med([](const RunResult& r) { return r.longest_relayout_ms; }));
+    std::printf("%-9g %8.2f %8.2f %13.1f %8.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
+                med([](const RunResult& r) { return r.longest_frame_ms; }),
+                med([](const RunResult& r) { return double(r.layout_frames); }),
+                med([](const RunResult& r) { return r.longest_layout_ms; }));
     for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14.2f", med([&](const RunResult& r) { return r.pass_ms[p]; }));
     std::printf(" %8.0f %15.0f\n", med([](const RunResult& r) { return r.faults; }),
                 med([](const RunResult& r) { return r.relayout_faults; }));
@@ -137,8 +144,8 @@ int main(int argc, char** argv) {
       const double fraction = fractions[(k + round) % nf];
       const RunResult r = run(prepared, params, prep_frames + 1, frames, fraction);
       results[fraction].push_back(r);
-      std::printf("round %d, fraction %g: frame %.2f ms, %d relayouts (longest %.1f ms) |", round + 1, fraction,
-                  r.frame_ms, r.relayouts, r.longest_relayout_ms);
+      std::printf("round %d, fraction %g: frame %.2f ms (longest %.2f), %d layout frames (longest phase %.1f ms) |",
+                  round + 1, fraction, r.frame_ms, r.longest_frame_ms, r.layout_frames, r.longest_layout_ms);
       for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %s %.2f", to_string(Pass(p)), r.pass_ms[p]);
       std::printf(" | page faults %.0f a frame, %.0f a relayout frame\n", r.faults, r.relayout_faults);
       std::fflush(stdout);

@@ -5,7 +5,9 @@
 # of each, and the median of the paired ratios B/A (the two runs of one round share its load).
 #
 # Usage: scripts/ab.sh A_BINARY B_BINARY FILTER [ROUNDS=4] [REPETITIONS=3] [COUNTER]
-# COUNTER: the user counter to compare (default: the benchmark's real time), e.g. us_per_event.
+# COUNTER: the user counter to compare (default: the benchmark's real time), e.g. us_per_event;
+# several separated by commas give a table each from the same runs (real_time: the time itself),
+# e.g. real_time,longest_ms.
 # CRUMPLE_AB_PLACEMENT=1: before each round, A's binary measures how far apart the first two
 # CPUs are (BM_CoreToCore's round trip), printed a round under the table: a VM's host may move
 # its vCPUs between chips from one minute to the next, which changes two-thread timings
@@ -41,8 +43,8 @@ for r in $(seq "$rounds"); do
 done
 /usr/bin/python3 - "$out" "$rounds" "$counter" "$placement" <<'EOF'
 import json, statistics, sys
-out, rounds, counter, placement = sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4] == "1"
-def medians(side, r):
+out, rounds, counters, placement = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(","), sys.argv[4] == "1"
+def medians(side, r, counter):
     path, rows = f"{out}/{side}{r}.json", {}
     try:
         benchmarks = json.load(open(path))["benchmarks"]
@@ -57,20 +59,24 @@ def medians(side, r):
                 sys.exit(f"ab.sh: {b['run_name']} has no counter {counter}")
             rows[b["run_name"]] = b[counter] if counter else b["real_time"]
     return rows
-runs = {side: [medians(side, r) for r in range(1, rounds + 1)] for side in "AB"}
-names = sorted(set().union(*runs["A"]) & set().union(*runs["B"]))
-if not names:
-    sys.exit("ab.sh: the filter matched no benchmark in both binaries")
-unit = counter or "real time"
-print(f"| benchmark | A ({unit}) | B | median A | median B | median of B/A |")
-print("|---|---|---|---:|---:|---:|")
-for n in names:
-    pairs = [(a[n], b[n]) for a, b in zip(runs["A"], runs["B"]) if n in a and n in b]  # by round
-    A, B = [a for a, _ in pairs], [b for _, b in pairs]
-    ratios = [b / a for a, b in pairs]
-    fmt = lambda xs: " ".join(f"{x:.3g}" for x in xs)
-    print(f"| {n} | {fmt(A)} | {fmt(B)} | {statistics.median(A):.3g} | {statistics.median(B):.3g} "
-          f"| {statistics.median(ratios):.3f} |")
+def table(counter):
+    runs = {side: [medians(side, r, counter) for r in range(1, rounds + 1)] for side in "AB"}
+    names = sorted(set().union(*runs["A"]) & set().union(*runs["B"]))
+    if not names:
+        sys.exit("ab.sh: the filter matched no benchmark in both binaries")
+    print(f"| benchmark | A ({counter or 'real time'}) | B | median A | median B | median of B/A |")
+    print("|---|---|---|---:|---:|---:|")
+    for n in names:
+        pairs = [(a[n], b[n]) for a, b in zip(runs["A"], runs["B"]) if n in a and n in b]  # by round
+        A, B = [a for a, _ in pairs], [b for _, b in pairs]
+        ratios = [b / a for a, b in pairs]
+        fmt = lambda xs: " ".join(f"{x:.3g}" for x in xs)
+        print(f"| {n} | {fmt(A)} | {fmt(B)} | {statistics.median(A):.3g} | {statistics.median(B):.3g} "
+              f"| {statistics.median(ratios):.3f} |")
+for k, counter in enumerate(counters):
+    if k:
+        print()
+    table("" if counter == "real_time" else counter)
 if placement:
     trips = []
     for r in range(1, rounds + 1):

@@ -200,13 +200,21 @@ StepEvents FastSimulator::step() {
       normals_valid_ = false;
     }
   }
-  if (layout_stale(topo_, layout_fraction_)) {
-    PassTimer t(pass_seconds_, int(Pass::Layout));
-    relayout(topo_, par_, layout_scratch_);
-    colors_.invalidate();
-  }
+  update_layout();
   ++steps_;
   return ev;
+}
+
+// A relayout's two phases in consecutive steps (layout.h): a stale layout starts one, and the
+// step after finishes it before another can start.
+void FastSimulator::update_layout() {
+  const bool elements = elements_to_relayout_;
+  if (!elements && !layout_stale(topo_, layout_fraction_)) return;
+  PassTimer t(pass_seconds_, int(Pass::Layout));
+  if (elements) relayout_elements(topo_, par_, layout_scratch_);
+  else relayout_vertices(topo_, par_, layout_scratch_);
+  elements_to_relayout_ = !elements;
+  colors_.invalidate();
 }
 
 std::vector<std::string> FastSimulator::pass_names() const {
@@ -232,6 +240,7 @@ void FastSimulator::run_pass(Pass p) {
     case Pass::TopologyApply: adapt(); break;
     case Pass::Layout:
       relayout(topo_, par_, layout_scratch_);
+      elements_to_relayout_ = false;
       colors_.invalidate();
       break;
     case Pass::kCount: break;

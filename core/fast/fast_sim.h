@@ -32,7 +32,9 @@
 //              waves, both with the serial result (docs/DECISIONS.md D13, D14).
 //   layout     when enough elements were created since the last time, relayout() (layout.h)
 //              reorders every slot along a space-filling curve of the rest positions, keeping
-//              logical ids, so that neighbours stay in nearby cache lines (D12).
+//              logical ids, so that neighbours stay in nearby cache lines (D12): the vertices
+//              in that step, the edges and triangles in the next, so that no step carries it
+//              whole.
 //   data       the mesh (topology.h: hot vertex state, cold topology, adjacency) outlives the
 //              step; what the forces and integrate passes hand on to each other (rows, edge
 //              records, forces, guesses) is per-step scratch (step_scratch.h), which edits and
@@ -102,7 +104,8 @@ class FastSimulator final : public Simulator {
   const Topology& topology() const { return topo_; }
   /// When to relayout: once the vertices created since the last one reach this fraction of the
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
-  /// but for the last bits of the momentum correction (layout.h).
+  /// but for the last bits of the momentum correction (layout.h). A relayout's second phase
+  /// runs in the step after its first, whatever the fraction.
   void set_layout_fraction(double f) { layout_fraction_ = f; }
   /// Test hook: apply a pass's splits and restores one after the other instead of in parallel
   /// rounds and waves (which must give the same result, bit for bit).
@@ -135,6 +138,7 @@ class FastSimulator final : public Simulator {
   void integrate_xpbd();
   void viscous_step(const StepConstants& c);  ///< the viscosity's implicit step, no force
   StepEvents adapt();
+  void update_layout();    ///< a relayout's phase when one is due (layout.h)
   void adapt_decide();     ///< normals on the current state, adapt_test into decisions_, the events listed
   StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
   // The caller's manipulators (fast_manipulators.cpp).
@@ -199,6 +203,8 @@ class FastSimulator final : public Simulator {
   ConstraintColors colors_;               ///< XPBD's projection order (stale after any edit)
   Manipulators manip_;                    ///< the caller's, applied every step
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
+  bool elements_to_relayout_ = false;     ///< the last step ran relayout_vertices: this one
+                                          ///< runs relayout_elements (layout.h)
   bool serial_edits_ = false;             ///< see set_serial_edits
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   std::vector<std::size_t> render_scratch_;  ///< render_triangles' block starts

@@ -242,108 +242,150 @@ bool layout_stale(const Topology& m, double fraction) {
 }
 
 namespace {
-/// The new slot orders and their inverses (s.vnew[old] = new): vertices along the Morton curve,
-/// then edges by their lower endpoint's new slot and triangles by their lowest corner's
-/// (counting sorts), dead elements last.
-void slot_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
-  const Vertices& V = m.V;
-  const Edges& E = m.E;
-  const Triangles& T = m.T;
-  const int nv = V.size(), ne = E.size(), nt = T.size();
-  vertex_order(par, V, s);
-  inverse(par, s.vorder, s.vnew);
-  const Array<int>& vnew = s.vnew;
-  resize_scratch(s.key, ne);
-  par.run(ne, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(vnew[E[k].a], vnew[E[k].b]) : nv;
-  });
-  counting_order(par, s, nv + 1, s.eorder);
-  inverse(par, s.eorder, s.enew);
-  resize_scratch(s.key, nt);
-  par.run(nt, kGrain, [&](int b, int e) {
-    for (int t = b; t < e; ++t)
-      s.key[t] = T.alive[t] ? std::min({vnew[T[t].v[0]], vnew[T[t].v[1]], vnew[T[t].v[2]]}) : nv;
-  });
-  counting_order(par, s, nv + 1, s.torder);
-  inverse(par, s.torder, s.tnew);
-}
-
-/// Old slot -> new slot of each kind (-1, "none", stays -1).
-struct Renames {
-  const Array<int>&vnew, &enew, &tnew;
-  std::int32_t v(std::int32_t x) const { return x >= 0 ? std::int32_t(vnew[x]) : x; }
-  std::int32_t e(std::int32_t x) const { return x >= 0 ? std::int32_t(enew[x]) : x; }
-  std::int32_t t(std::int32_t x) const { return x >= 0 ? std::int32_t(tnew[x]) : x; }
+/// Old slot -> new slot of one kind (-1, "none", stays -1).
+struct Rename {
+  const Array<int>& to;
+  std::int32_t operator()(std::int32_t x) const { return x >= 0 ? std::int32_t(to[x]) : x; }
 };
 
-// Vertices: the state that lives across steps (forces, sums and guesses are rewritten by the
-// next step before anything reads them), then the adjacency lists with their entries renamed.
-// A group's arrays have distinct spares.
-void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Renames& to) {
+/// Renames each split record's entries in place (free records too: their stale ids stay in
+/// range and are overwritten on reuse).
+template <class F>
+void rename_records(Array<SplitRecord>& records, const Parallel& par, F rename) {
+  par.run(int(records.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) rename(records[k]);
+  });
+}
+
+// Phase one. The vertices' state that lives across steps (forces, sums and guesses are
+// rewritten by the next step before anything reads them) is permuted, and the adjacency pools
+// are repacked in the new vertex order with the neighbours renamed; the other entries (edge and
+// triangle slots) keep their values until phase two. A group's arrays have distinct spares.
+void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Rename& v) {
   const Array<int>& vorder = s.vorder;
   permute(par, vorder, gathered(V.xm, s.spare_rows), gathered(V.spring_list, s.spare_heads), gathered(V.lid, s.spare_vid));
   permute(par, vorder, gathered(V.vm, s.spare_rows), gathered(V.tri_list, s.spare_heads));
   permute(par, vorder, gathered(V.nr, s.spare_rows));
   permute(par, vorder, gathered(V.rest, s.spare_rows));
-  repack(par, s, {V.springs, s.spare_springs}, {V.nbrs, s.spare_nbrs}, V.spring_list,
-         [&](std::int32_t x) { return (to.enew[x >> 1] << 1) | (x & 1); }, [&](std::int32_t x) { return to.v(x); });
-  repack(par, s, {V.tris, s.spare_tris}, {V.wings, s.spare_wings}, V.tri_list,
-         [&](std::int32_t x) { return (to.tnew[x >> 2] << 2) | (x & 3); }, [&](std::int32_t x) { return to.e(x); });
+  const auto same = [](std::int32_t x) { return x; };
+  repack(par, s, {V.springs, s.spare_springs}, {V.nbrs, s.spare_nbrs}, V.spring_list, same, v);
+  repack(par, s, {V.tris, s.spare_tris}, {V.wings, s.spare_wings}, V.tri_list, same, same);
   V.garbage_e = V.garbage_t = 0;
 }
 
-// Edges (the edge pass's output is per step and is not kept). A dead edge joins slot 0 to
-// itself, as the topology's convention says.
-void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Renames& to) {
+// Phase one: the edges' and triangles' vertex entries renamed where they are (one streaming
+// pass each). A dead edge joins slot 0 to itself and a dead triangle has corners 0, as the
+// topology's convention says.
+void rename_vertices(Topology& m, const Parallel& par, const Rename& v) {
+  Edges& E = m.E;
+  par.run(E.size(), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      EdgeRecord& r = E[k];
+      if (r.flags & kAlive) r.a = v(r.a), r.b = v(r.b);
+      else r.a = r.b = 0;
+      r.wl = v(r.wl), r.wr = v(r.wr);
+    }
+  });
+  Triangles& T = m.T;
+  par.run(T.size(), kGrain, [&](int b, int e) {
+    for (int t = b; t < e; ++t)
+      for (int k = 0; k < 3; ++k) T[t].v[k] = T.alive[t] ? v(T[t].v[k]) : kNoFace.v[k];
+  });
+  rename_records(m.records, par, [&](SplitRecord& r) {
+    r.n = v(r.n);
+    for (int q = 0; q < 4; ++q) r.k[q] = v(r.k[q]);
+  });
+}
+
+/// Phase two's orders and their inverses (s.enew[old] = new): edges by their lower endpoint's
+/// slot and triangles by their lowest corner's (counting sorts), dead elements last.
+void element_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
+  const Edges& E = m.E;
+  const Triangles& T = m.T;
+  const int nv = m.V.size(), ne = E.size(), nt = T.size();
+  resize_scratch(s.key, ne);
+  par.run(ne, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(E[k].a, E[k].b) : nv;
+  });
+  counting_order(par, s, nv + 1, s.eorder);
+  inverse(par, s.eorder, s.enew);
+  resize_scratch(s.key, nt);
+  par.run(nt, kGrain, [&](int b, int e) {
+    for (int t = b; t < e; ++t) s.key[t] = T.alive[t] ? std::min({T[t].v[0], T[t].v[1], T[t].v[2]}) : nv;
+  });
+  counting_order(par, s, nv + 1, s.torder);
+  inverse(par, s.torder, s.tnew);
+}
+
+// Phase two: the edges permuted with their triangles renamed (the edge pass's output is per
+// step and is not kept); a dead edge killed since phase one joins slot 0 to itself again.
+void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Rename& t) {
   permute(par, s.eorder,
           gathered(E.slots, s.spare_edges,
                    [&](EdgeRecord r, int) {
-                     if (r.flags & kAlive) r.a = to.v(r.a), r.b = to.v(r.b);
-                     else r.a = r.b = 0;
-                     r.wl = to.v(r.wl), r.wr = to.v(r.wr), r.tri0 = to.t(r.tri0), r.tri1 = to.t(r.tri1);
+                     if (!(r.flags & kAlive)) r.a = r.b = 0;
+                     r.tri0 = t(r.tri0), r.tri1 = t(r.tri1);
                      return r;
                    }),
           gathered(E.lid, s.spare_eid));
 }
 
-// Triangles (dead ones keep corners 0 and no edges). The areas are not moved: they are
-// per-step values that compute_normals writes for every slot before anything reads them.
-void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Renames& to) {
-  const std::uint8_t* old_alive = T.alive.data();
+// Phase two: the triangles permuted with their edges renamed. The areas are not moved: they
+// are per-step values that compute_normals writes for every slot before anything reads them.
+void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Rename& e) {
   permute(par, s.torder,
           gathered(T.slots, s.spare_faces,
-                   [&](Face f, int from) {
-                     const bool alive = old_alive[from];
-                     for (int k = 0; k < 3; ++k) f.v[k] = alive ? std::int32_t(to.vnew[f.v[k]]) : kNoFace.v[k], f.e[k] = to.e(f.e[k]);
+                   [&](Face f, int) {
+                     for (int k = 0; k < 3; ++k) f.e[k] = e(f.e[k]);
                      return f;
                    }),
           gathered(T.lid, s.spare_tid), gathered(T.alive, s.spare_alive));
 }
 
-// Split records (free ones too: their stale ids stay in range and are overwritten on reuse).
-void rename_records(Array<SplitRecord>& records, const Parallel& par, const Renames& to) {
-  par.run(int(records.size()), kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      SplitRecord& r = records[k];
-      r.n = to.v(r.n);
-      for (int q = 0; q < 4; ++q) r.k[q] = to.v(r.k[q]), r.e[q] = to.e(r.e[q]), r.t[q] = to.t(r.t[q]);
+// Phase two: the adjacency lists' edge and triangle entries renamed where they are, a vertex's
+// blocks at a time (phase one packed them in vertex order; only the blocks in use are read:
+// the garbage a later move left behind holds nothing to rename).
+void rename_lists(Vertices& V, const Parallel& par, const Rename& e, const Rename& t) {
+  std::int32_t* __restrict springs = V.springs.data();
+  std::int32_t* __restrict tris = V.tris.data();
+  std::int32_t* __restrict wings = V.wings.data();
+  par.run(V.size(), kGrain, [&](int b, int end) {
+    for (int k = b; k < end; ++k) {
+      const ListHead hs = V.spring_list[k], ht = V.tri_list[k];
+      for (int w = hs.at; w < hs.at + hs.count; ++w) springs[w] = (e.to[springs[w] >> 1] << 1) | (springs[w] & 1);
+      for (int w = ht.at; w < ht.at + ht.count; ++w)
+        tris[w] = (t.to[tris[w] >> 2] << 2) | (tris[w] & 3), wings[w] = e(wings[w]);
     }
   });
 }
 }  // namespace
 
-void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
-  slot_orders(m, par, s);
-  const Renames to{s.vnew, s.enew, s.tnew};
-  move_vertices(m.V, par, s, to);
-  move_edges(m.E, par, s, to);
-  move_triangles(m.T, par, s, to);
-  rename_records(m.records, par, to);
-  // The inverse maps; free lists hold logical ids and do not change.
-  inverse(par, m.V.lid, m.V.phys);
+void relayout_vertices(Topology& m, const Parallel& par, LayoutScratch& s) {
+  vertex_order(par, m.V, s);
+  inverse(par, s.vorder, s.vnew);
+  const Rename v{s.vnew};
+  move_vertices(m.V, par, s, v);
+  rename_vertices(m, par, v);
+  inverse(par, m.V.lid, m.V.phys);  // free lists hold logical ids and do not change
+  m.V.created = 0;
+}
+
+void relayout_elements(Topology& m, const Parallel& par, LayoutScratch& s) {
+  element_orders(m, par, s);
+  const Rename e{s.enew}, t{s.tnew};
+  move_edges(m.E, par, s, t);
+  move_triangles(m.T, par, s, e);
+  rename_lists(m.V, par, e, t);
+  rename_records(m.records, par, [&](SplitRecord& r) {
+    for (int q = 0; q < 4; ++q) r.e[q] = e(r.e[q]), r.t[q] = t(r.t[q]);
+  });
   inverse(par, m.E.lid, m.E.phys);
   inverse(par, m.T.lid, m.T.phys);
-  m.V.created = 0;
+}
+
+void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
+  relayout_vertices(m, par, s);
+  relayout_elements(m, par, s);
 }
 
 }  // namespace crumple::fast

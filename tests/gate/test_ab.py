@@ -3,7 +3,8 @@
 Each fake binary is a small script that writes Google Benchmark's JSON (a median aggregate per
 benchmark) to --benchmark_out, taking its round's value from a list it is given, and logs each
 call; the tests read ab.sh's table. Wrong code this catches: rounds not alternated A, B, A, B;
-the ratio taken of the medians instead of per round; the counter ignored; a filter that matched
+the ratio taken of the medians instead of per round; the counter ignored, or one of several
+counters' tables missing or taken from the other's values; a filter that matched
 nothing, or a missing binary, accepted silently; with CRUMPLE_AB_PLACEMENT=1, the round trips
 printed out of round order, measured when not asked for, or a missing one passed over.
 """
@@ -120,6 +121,17 @@ class AbScript(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertIn("us_per_event", r.stdout)
         self.assertEqual(self.row(r.stdout, "BM_Events/fast/1/128")[1:], ["1 2", "3 2", "1.5", "2.5", "2.000"])
+
+    def test_several_counters_give_a_table_each(self):
+        a = self.fake("A", [10, 20])
+        b = self.fake("B", [30, 20])
+        r = self.run_ab(a, b, "BM_Events", "2", "1", "real_time,us_per_event")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        time, events = r.stdout.split("\n\n")
+        self.assertIn("A (real time)", time)
+        self.assertEqual(self.row(time, "BM_Events/fast/1/128")[1:], ["10 20", "30 20", "15", "25", "2.000"])
+        self.assertIn("A (us_per_event)", events)
+        self.assertEqual(self.row(events, "BM_Events/fast/1/128")[1:], ["1 2", "3 2", "1.5", "2.5", "2.000"])
 
     def test_unknown_counter_fails(self):
         r = self.run_ab(self.fake("A", [1]), self.fake("B", [1]), "BM_Events", "1", "1", "no_such")

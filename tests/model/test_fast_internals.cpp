@@ -495,6 +495,51 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// True when the live edges and triangles are sorted by their lowest vertex slot and the dead
+// ones follow them (what the relayout's second phase leaves).
+bool elements_in_vertex_order(const fast::Topology& m) {
+  int last = -1;
+  for (int e = 0; e < m.E.size(); ++e) {
+    const int key = (m.E[e].flags & fast::kAlive) ? std::min(m.E[e].a, m.E[e].b) : m.V.size();
+    if (key < last) return false;
+    last = key;
+  }
+  last = -1;
+  for (int t = 0; t < m.T.size(); ++t) {
+    const auto& v = m.T[t].v;
+    const int key = m.T.alive[t] ? std::min({v[0], v[1], v[2]}) : m.V.size();
+    if (key < last) return false;
+    last = key;
+  }
+  return true;
+}
+
+// A relayout runs in two steps (layout.h): the step that finds the layout stale moves the
+// vertices only, the next one sorts the edges and triangles, even when no relayout is due any
+// more; each leaves a valid topology. Catches the second phase skipped, run in the first
+// step, or cancelled by the layout fraction.
+TEST(Layout, PhasesRunInConsecutiveSteps) {
+  Params p;
+  fast::FastSimulator sim(make_grid(24), p, 2);
+  sim.set_layout_fraction(-1);
+  for (int f = 0; f < 60; ++f) sim.step();
+  const fast::Topology& m = sim.topology();
+  ASSERT_GT(m.V.created, 0);
+  ASSERT_FALSE(elements_in_vertex_order(m));  // splits appended edges and triangles
+  sim.set_layout_fraction(0);
+  sim.step();
+  ASSERT_EQ(sim.check_topology(), "");
+  EXPECT_EQ(m.V.created, 0);
+  int moved = 0;
+  for (int v = 0; v < m.V.size(); ++v) moved += m.V.lid[v] != v;
+  EXPECT_GT(moved, m.V.size() / 2);
+  EXPECT_FALSE(elements_in_vertex_order(m));
+  sim.set_layout_fraction(-1);
+  sim.step();
+  ASSERT_EQ(sim.check_topology(), "");
+  EXPECT_TRUE(elements_in_vertex_order(m));
+}
+
 // Splits and restores applied in parallel rounds and waves of vertex-disjoint events against
 // the same events applied one after the other in event order: bit-identical states through a
 // crumple with thousands of splits and restores, on one thread (rounds and waves run as plain
