@@ -84,14 +84,15 @@ double topology_apply(const LayoutSizes& s, double events) {
   return adapt_test(s) + s.edges * 2 * kU8 + events * event(s);
 }
 
-// A relayout's two phases (layout.h) read every array of every element and write it permuted,
+// A relayout's three phases (layout.h) read every array of every element and write it permuted,
 // not the step's scratch, which the next step rewrites (no EdgeOut, no areas), and each renames
-// the other kinds' entries in place: phase one the edge records and faces, phase two three of
-// the four pools (not the neighbours). Split records are left out.
+// the other kinds' entries in place: the edge records in the vertex and triangle phases, the
+// faces in the vertex and edge phases, three of the four pools (not the neighbours) in the
+// triangle and edge phases. Split records are left out.
 double layout(const LayoutSizes& s) {
   const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t) + kI * (s.room_e + 2 * s.room_t);
-  const double edge = 2 * kEdge + 2 * kI;
-  const double triangle = 2 * kFace + kU8 + 2 * kI;
+  const double edge = 3 * kEdge + 2 * kI;
+  const double triangle = 3 * kFace + kU8 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);
 }
 }  // namespace

@@ -205,15 +205,13 @@ StepEvents FastSimulator::step() {
   return ev;
 }
 
-// A relayout's two phases in consecutive steps (layout.h): a stale layout starts one, and the
-// step after finishes it before another can start.
+// A relayout's phases in consecutive steps (layout.h): a stale layout starts one, and the
+// steps after finish it before another can start.
 void FastSimulator::update_layout() {
-  const bool elements = elements_to_relayout_;
-  if (!elements && !layout_stale(topo_, layout_fraction_)) return;
+  if (layout_phase_ == 0 && !layout_stale(topo_, layout_fraction_)) return;
   PassTimer t(pass_seconds_, int(Pass::Layout));
-  if (elements) relayout_elements(topo_, par_, layout_scratch_);
-  else relayout_vertices(topo_, par_, layout_scratch_);
-  elements_to_relayout_ = !elements;
+  relayout_phase(layout_phase_, topo_, par_, layout_scratch_);
+  layout_phase_ = (layout_phase_ + 1) % kLayoutPhases;
   colors_.invalidate();
 }
 
@@ -240,7 +238,7 @@ void FastSimulator::run_pass(Pass p) {
     case Pass::TopologyApply: adapt(); break;
     case Pass::Layout:
       relayout(topo_, par_, layout_scratch_);
-      elements_to_relayout_ = false;
+      layout_phase_ = 0;
       colors_.invalidate();
       break;
     case Pass::kCount: break;

@@ -33,8 +33,8 @@
 //   layout     when enough elements were created since the last time, relayout() (layout.h)
 //              reorders every slot along a space-filling curve of the rest positions, keeping
 //              logical ids, so that neighbours stay in nearby cache lines (D12): the vertices
-//              in that step, the edges and triangles in the next, so that no step carries it
-//              whole.
+//              in that step, the triangles and the edges in the next two, so that no step
+//              carries it whole.
 //   data       the mesh (topology.h: hot vertex state, cold topology, adjacency) outlives the
 //              step; what the forces and integrate passes hand on to each other (rows, edge
 //              records, forces, guesses) is per-step scratch (step_scratch.h), which edits and
@@ -104,8 +104,8 @@ class FastSimulator final : public Simulator {
   const Topology& topology() const { return topo_; }
   /// When to relayout: once the vertices created since the last one reach this fraction of the
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
-  /// but for the last bits of the momentum correction (layout.h). A relayout's second phase
-  /// runs in the step after its first, whatever the fraction.
+  /// but for the last bits of the momentum correction (layout.h). A relayout's later phases
+  /// run in the steps after its first, whatever the fraction.
   void set_layout_fraction(double f) { layout_fraction_ = f; }
   /// Test hook: apply a pass's splits and restores one after the other instead of in parallel
   /// rounds and waves (which must give the same result, bit for bit).
@@ -203,8 +203,7 @@ class FastSimulator final : public Simulator {
   ConstraintColors colors_;               ///< XPBD's projection order (stale after any edit)
   Manipulators manip_;                    ///< the caller's, applied every step
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
-  bool elements_to_relayout_ = false;     ///< the last step ran relayout_vertices: this one
-                                          ///< runs relayout_elements (layout.h)
+  int layout_phase_ = 0;                  ///< the relayout phase this step runs (0: when stale)
   bool serial_edits_ = false;             ///< see set_serial_edits
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   std::vector<std::size_t> render_scratch_;  ///< render_triangles' block starts

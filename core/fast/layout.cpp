@@ -260,7 +260,8 @@ void rename_records(Array<SplitRecord>& records, const Parallel& par, F rename) 
 // Phase one. The vertices' state that lives across steps (forces, sums and guesses are
 // rewritten by the next step before anything reads them) is permuted, and the adjacency pools
 // are repacked in the new vertex order with the neighbours renamed; the other entries (edge and
-// triangle slots) keep their values until phase two. A group's arrays have distinct spares.
+// triangle slots) keep their values until phases two and three. A group's arrays have distinct
+// spares.
 void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Rename& v) {
   const Array<int>& vorder = s.vorder;
   permute(par, vorder, gathered(V.xm, s.spare_rows), gathered(V.spring_list, s.spare_heads), gathered(V.lid, s.spare_vid));
@@ -297,18 +298,11 @@ void rename_vertices(Topology& m, const Parallel& par, const Rename& v) {
   });
 }
 
-/// Phase two's orders and their inverses (s.enew[old] = new): edges by their lower endpoint's
-/// slot and triangles by their lowest corner's (counting sorts), dead elements last.
-void element_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
-  const Edges& E = m.E;
+/// Phase two's order and its inverse (s.tnew[old] = new): triangles by their lowest corner's
+/// slot (a counting sort), dead ones last.
+void triangle_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const Triangles& T = m.T;
-  const int nv = m.V.size(), ne = E.size(), nt = T.size();
-  resize_scratch(s.key, ne);
-  par.run(ne, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(E[k].a, E[k].b) : nv;
-  });
-  counting_order(par, s, nv + 1, s.eorder);
-  inverse(par, s.eorder, s.enew);
+  const int nv = m.V.size(), nt = T.size();
   resize_scratch(s.key, nt);
   par.run(nt, kGrain, [&](int b, int e) {
     for (int t = b; t < e; ++t) s.key[t] = T.alive[t] ? std::min({T[t].v[0], T[t].v[1], T[t].v[2]}) : nv;
@@ -317,48 +311,72 @@ void element_orders(const Topology& m, const Parallel& par, LayoutScratch& s) {
   inverse(par, s.torder, s.tnew);
 }
 
-// Phase two: the edges permuted with their triangles renamed (the edge pass's output is per
-// step and is not kept); a dead edge killed since phase one joins slot 0 to itself again.
-void move_edges(Edges& E, const Parallel& par, LayoutScratch& s, const Rename& t) {
+/// Phase three's order and its inverse (s.enew[old] = new): edges by their lower endpoint's
+/// slot (a counting sort), dead ones last.
+void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
+  const Edges& E = m.E;
+  const int nv = m.V.size(), ne = E.size();
+  resize_scratch(s.key, ne);
+  par.run(ne, kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(E[k].a, E[k].b) : nv;
+  });
+  counting_order(par, s, nv + 1, s.eorder);
+  inverse(par, s.eorder, s.enew);
+}
+
+/// One pool's entries of every vertex's list renamed where they are, a vertex's block at a time
+/// (phase one packed the blocks in vertex order; only the blocks in use are read: the garbage
+/// a later move left behind holds nothing to rename).
+template <class F>
+void rename_pool(const Parallel& par, const Array<ListHead>& heads, Array<std::int32_t>& pool, F rename) {
+  std::int32_t* __restrict entry = pool.data();
+  par.run(int(heads.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      const ListHead h = heads[k];
+      for (int w = h.at; w < h.at + h.count; ++w) entry[w] = rename(entry[w]);
+    }
+  });
+}
+
+// Phase two: the triangles permuted (the areas are not moved: they are per-step values that
+// compute_normals writes for every slot before anything reads them), then their slots renamed
+// where they are: in the edges' sides, the vertices' triangle lists and the split records.
+void move_triangles(Topology& m, const Parallel& par, LayoutScratch& s, const Rename& t) {
+  Triangles& T = m.T;
+  permute(par, s.torder, gathered(T.slots, s.spare_faces), gathered(T.lid, s.spare_tid), gathered(T.alive, s.spare_alive));
+  Edges& E = m.E;
+  par.run(E.size(), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) E[k].tri0 = t(E[k].tri0), E[k].tri1 = t(E[k].tri1);
+  });
+  rename_pool(par, m.V.tri_list, m.V.tris, [&](std::int32_t x) { return (t.to[x >> 2] << 2) | (x & 3); });
+  rename_records(m.records, par, [&](SplitRecord& r) {
+    for (int q = 0; q < 4; ++q) r.t[q] = t(r.t[q]);
+  });
+}
+
+// Phase three: the edges permuted (the edge pass's output is per step and is not kept; a dead
+// edge killed since phase one joins slot 0 to itself again), then their slots renamed where they
+// are: in the triangles' sides, the vertices' spring and wing lists and the split records.
+void move_edges(Topology& m, const Parallel& par, LayoutScratch& s, const Rename& e) {
+  Edges& E = m.E;
   permute(par, s.eorder,
           gathered(E.slots, s.spare_edges,
                    [&](EdgeRecord r, int) {
                      if (!(r.flags & kAlive)) r.a = r.b = 0;
-                     r.tri0 = t(r.tri0), r.tri1 = t(r.tri1);
                      return r;
                    }),
           gathered(E.lid, s.spare_eid));
-}
-
-// Phase two: the triangles permuted with their edges renamed. The areas are not moved: they
-// are per-step values that compute_normals writes for every slot before anything reads them.
-void move_triangles(Triangles& T, const Parallel& par, LayoutScratch& s, const Rename& e) {
-  permute(par, s.torder,
-          gathered(T.slots, s.spare_faces,
-                   [&](Face f, int) {
-                     for (int k = 0; k < 3; ++k) f.e[k] = e(f.e[k]);
-                     return f;
-                   }),
-          gathered(T.lid, s.spare_tid), gathered(T.alive, s.spare_alive));
-}
-
-// Phase two: the adjacency lists' edge and triangle entries renamed where they are, a vertex's
-// blocks at a time (phase one packed them in vertex order; only the blocks in use are read:
-// the garbage a later move left behind holds nothing to rename).
-void rename_lists(Vertices& V, const Parallel& par, const Rename& e, const Rename& t) {
-  std::int32_t* __restrict springs = V.springs.data();
-  std::int32_t* __restrict tris = V.tris.data();
-  std::int32_t* __restrict wings = V.wings.data();
-  par.run(V.size(), kGrain, [&](int b, int end) {
-    for (int k = b; k < end; ++k) {
-      const ListHead hs = V.spring_list[k], ht = V.tri_list[k];
-      for (int w = hs.at; w < hs.at + hs.count; ++w) springs[w] = (e.to[springs[w] >> 1] << 1) | (springs[w] & 1);
-      for (int w = ht.at; w < ht.at + ht.count; ++w)
-        tris[w] = (t.to[tris[w] >> 2] << 2) | (tris[w] & 3), wings[w] = e(wings[w]);
-    }
+  Triangles& T = m.T;
+  par.run(T.size(), kGrain, [&](int b, int end) {
+    for (int t = b; t < end; ++t)
+      for (int k = 0; k < 3; ++k) T[t].e[k] = e(T[t].e[k]);
+  });
+  rename_pool(par, m.V.spring_list, m.V.springs, [&](std::int32_t x) { return (e.to[x >> 1] << 1) | (x & 1); });
+  rename_pool(par, m.V.tri_list, m.V.wings, e);
+  rename_records(m.records, par, [&](SplitRecord& r) {
+    for (int q = 0; q < 4; ++q) r.e[q] = e(r.e[q]);
   });
 }
-}  // namespace
 
 void relayout_vertices(Topology& m, const Parallel& par, LayoutScratch& s) {
   vertex_order(par, m.V, s);
@@ -370,22 +388,29 @@ void relayout_vertices(Topology& m, const Parallel& par, LayoutScratch& s) {
   m.V.created = 0;
 }
 
-void relayout_elements(Topology& m, const Parallel& par, LayoutScratch& s) {
-  element_orders(m, par, s);
-  const Rename e{s.enew}, t{s.tnew};
-  move_edges(m.E, par, s, t);
-  move_triangles(m.T, par, s, e);
-  rename_lists(m.V, par, e, t);
-  rename_records(m.records, par, [&](SplitRecord& r) {
-    for (int q = 0; q < 4; ++q) r.e[q] = e(r.e[q]), r.t[q] = t(r.t[q]);
-  });
-  inverse(par, m.E.lid, m.E.phys);
+void relayout_triangles(Topology& m, const Parallel& par, LayoutScratch& s) {
+  triangle_order(m, par, s);
+  move_triangles(m, par, s, Rename{s.tnew});
   inverse(par, m.T.lid, m.T.phys);
 }
 
+void relayout_edges(Topology& m, const Parallel& par, LayoutScratch& s) {
+  edge_order(m, par, s);
+  move_edges(m, par, s, Rename{s.enew});
+  inverse(par, m.E.lid, m.E.phys);
+}
+}  // namespace
+
 void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
-  relayout_vertices(m, par, s);
-  relayout_elements(m, par, s);
+  for (int phase = 0; phase < kLayoutPhases; ++phase) relayout_phase(phase, m, par, s);
+}
+
+void relayout_phase(int phase, Topology& m, const Parallel& par, LayoutScratch& s) {
+  switch (phase) {
+    case 0: relayout_vertices(m, par, s); break;
+    case 1: relayout_triangles(m, par, s); break;
+    default: relayout_edges(m, par, s); break;
+  }
 }
 
 }  // namespace crumple::fast

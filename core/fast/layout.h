@@ -17,13 +17,13 @@
 // last. The cost is a few passes over the state, so it runs only when enough elements were
 // created since the last one (FastSimulator's layout fraction).
 //
-// It runs in two phases, each a complete permutation of its own that leaves a valid topology,
-// so that a simulator can run them in consecutive steps and no step carries the whole cost: a
-// real-time loop must fit its longest frame. Phase one moves the vertices and repacks the
-// adjacency pools in their new order, renaming vertex entries everywhere; phase two sorts the
-// edges and triangles by the vertex slots it finds (new elements created in between included)
-// and renames their entries. Between the phases the edges and triangles keep their old order,
-// which costs the edge-ordered passes of one step some locality, not correctness.
+// It runs in three phases, each a complete permutation of one kind of element that renames
+// every reference to it and leaves a valid topology, so that a simulator can run them in
+// consecutive steps and no step carries the whole cost: a real-time loop must fit its longest
+// frame. Phase one moves the vertices and repacks the adjacency pools in their new order; phase
+// two sorts the triangles and phase three the edges by the vertex slots they find (new elements
+// created in between included). Until their phase the triangles and edges keep their old order,
+// which costs the passes of a step or two some locality, not correctness.
 #pragma once
 
 #include "fast/parallel.h"
@@ -60,15 +60,14 @@ struct LayoutScratch {
   Array<std::uint8_t> spare_alive;  ///< the triangles' alive bytes
 };
 
-/// Phase one: the vertex slots along the Morton curve, the pools repacked in that order, every
-/// vertex entry renamed; resets the vertices' `created` counter.
-void relayout_vertices(Topology& m, const Parallel& par, LayoutScratch& scratch);
+/// The phases of a relayout (above): vertices, triangles, edges.
+inline constexpr int kLayoutPhases = 3;
 
-/// Phase two: the edge and triangle slots sorted by the vertex slots as they are, every edge and
-/// triangle entry renamed.
-void relayout_elements(Topology& m, const Parallel& par, LayoutScratch& scratch);
+/// Runs phase `phase` (0 to kLayoutPhases - 1) of a relayout; phase 0 resets the vertices'
+/// `created` counter. Each phase sorts by the slots of the kinds before it as they are.
+void relayout_phase(int phase, Topology& m, const Parallel& par, LayoutScratch& scratch);
 
-/// Both phases, one after the other.
+/// Every phase, one after the other.
 void relayout(Topology& m, const Parallel& par, LayoutScratch& scratch);
 
 /// True when the vertices created since the last relayout are at least `fraction` of the slots

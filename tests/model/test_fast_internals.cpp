@@ -495,16 +495,10 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   EXPECT_LT(worst, 1e-6);
 }
 
-// True when the live edges and triangles are sorted by their lowest vertex slot and the dead
-// ones follow them (what the relayout's second phase leaves).
-bool elements_in_vertex_order(const fast::Topology& m) {
+// True when the live triangles are sorted by their lowest corner's slot and the dead ones
+// follow them (what the relayout's second phase leaves).
+bool triangles_in_vertex_order(const fast::Topology& m) {
   int last = -1;
-  for (int e = 0; e < m.E.size(); ++e) {
-    const int key = (m.E[e].flags & fast::kAlive) ? std::min(m.E[e].a, m.E[e].b) : m.V.size();
-    if (key < last) return false;
-    last = key;
-  }
-  last = -1;
   for (int t = 0; t < m.T.size(); ++t) {
     const auto& v = m.T[t].v;
     const int key = m.T.alive[t] ? std::min({v[0], v[1], v[2]}) : m.V.size();
@@ -514,10 +508,22 @@ bool elements_in_vertex_order(const fast::Topology& m) {
   return true;
 }
 
-// A relayout runs in two steps (layout.h): the step that finds the layout stale moves the
-// vertices only, the next one sorts the edges and triangles, even when no relayout is due any
-// more; each leaves a valid topology. Catches the second phase skipped, run in the first
-// step, or cancelled by the layout fraction.
+// The same for the edges and their lower endpoint (the third phase).
+bool edges_in_vertex_order(const fast::Topology& m) {
+  int last = -1;
+  for (int e = 0; e < m.E.size(); ++e) {
+    const int key = (m.E[e].flags & fast::kAlive) ? std::min(m.E[e].a, m.E[e].b) : m.V.size();
+    if (key < last) return false;
+    last = key;
+  }
+  return true;
+}
+
+// A relayout runs in three steps (layout.h): the step that finds the layout stale moves the
+// vertices only, the next one sorts the triangles, the one after the edges, even when no
+// relayout is due any more; each leaves a valid topology; then none runs. Catches a later phase
+// skipped, run early (two in one step) or cancelled by the layout fraction, and phases that run
+// on when no relayout is due.
 TEST(Layout, PhasesRunInConsecutiveSteps) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 2);
@@ -525,7 +531,8 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
   for (int f = 0; f < 60; ++f) sim.step();
   const fast::Topology& m = sim.topology();
   ASSERT_GT(m.V.created, 0);
-  ASSERT_FALSE(elements_in_vertex_order(m));  // splits appended edges and triangles
+  ASSERT_FALSE(triangles_in_vertex_order(m));  // splits appended triangles and edges
+  ASSERT_FALSE(edges_in_vertex_order(m));
   sim.set_layout_fraction(0);
   sim.step();
   ASSERT_EQ(sim.check_topology(), "");
@@ -533,11 +540,20 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
   int moved = 0;
   for (int v = 0; v < m.V.size(); ++v) moved += m.V.lid[v] != v;
   EXPECT_GT(moved, m.V.size() / 2);
-  EXPECT_FALSE(elements_in_vertex_order(m));
+  EXPECT_FALSE(triangles_in_vertex_order(m));
+  EXPECT_FALSE(edges_in_vertex_order(m));
   sim.set_layout_fraction(-1);
   sim.step();
   ASSERT_EQ(sim.check_topology(), "");
-  EXPECT_TRUE(elements_in_vertex_order(m));
+  EXPECT_TRUE(triangles_in_vertex_order(m));
+  EXPECT_FALSE(edges_in_vertex_order(m));
+  sim.step();
+  ASSERT_EQ(sim.check_topology(), "");
+  EXPECT_TRUE(edges_in_vertex_order(m));
+  // Then no phase runs until the layout is stale again.
+  const double layout_seconds = sim.pass_seconds()[int(fast::Pass::Layout)];
+  sim.step();
+  EXPECT_EQ(sim.pass_seconds()[int(fast::Pass::Layout)], layout_seconds);
 }
 
 // Splits and restores applied in parallel rounds and waves of vertex-disjoint events against
