@@ -275,22 +275,22 @@ void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Ren
 }
 
 // Phase one: the edges' and triangles' vertex entries renamed where they are (one streaming
-// pass each). A dead edge joins slot 0 to itself and a dead triangle has corners 0, as the
-// topology's convention says.
+// pass each). A dead edge keeps joining slot 0 to itself and a dead triangle keeps corners 0,
+// as the topology's convention says (release_edge, kNoFace): their zeros are not slots.
 void rename_vertices(Topology& m, const Parallel& par, const Rename& v) {
   Edges& E = m.E;
   par.run(E.size(), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       EdgeRecord& r = E[k];
       if (r.flags & kAlive) r.a = v(r.a), r.b = v(r.b);
-      else r.a = r.b = 0;
       r.wl = v(r.wl), r.wr = v(r.wr);
     }
   });
   Triangles& T = m.T;
   par.run(T.size(), kGrain, [&](int b, int e) {
     for (int t = b; t < e; ++t)
-      for (int k = 0; k < 3; ++k) T[t].v[k] = T.alive[t] ? v(T[t].v[k]) : kNoFace.v[k];
+      if (T.alive[t])
+        for (int k = 0; k < 3; ++k) T[t].v[k] = v(T[t].v[k]);
   });
   rename_records(m.records, par, [&](SplitRecord& r) {
     r.n = v(r.n);
@@ -354,18 +354,12 @@ void move_triangles(Topology& m, const Parallel& par, LayoutScratch& s, const Re
   });
 }
 
-// Phase three: the edges permuted (the edge pass's output is per step and is not kept; a dead
-// edge killed since phase one joins slot 0 to itself again), then their slots renamed where they
-// are: in the triangles' sides, the vertices' spring and wing lists and the split records.
+// Phase three: the edges permuted (the edge pass's output is per step and is not kept), then
+// their slots renamed where they are: in the triangles' sides, the vertices' spring and wing
+// lists and the split records.
 void move_edges(Topology& m, const Parallel& par, LayoutScratch& s, const Rename& e) {
   Edges& E = m.E;
-  permute(par, s.eorder,
-          gathered(E.slots, s.spare_edges,
-                   [&](EdgeRecord r, int) {
-                     if (!(r.flags & kAlive)) r.a = r.b = 0;
-                     return r;
-                   }),
-          gathered(E.lid, s.spare_eid));
+  permute(par, s.eorder, gathered(E.slots, s.spare_edges), gathered(E.lid, s.spare_eid));
   Triangles& T = m.T;
   par.run(T.size(), kGrain, [&](int b, int end) {
     for (int t = b; t < end; ++t)
