@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstdint>
 #include <cstddef>
 #include <new>
 #include <vector>
@@ -49,16 +50,13 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
  public:
   using Base::Base;
   Array() = default;
-  Array(const Array& o) : Base() {
-    this->reserve(o.capacity());
-    this->assign(o.begin(), o.end());
-    keep_warm();
-  }
+  Array(const Array& o) : Base() { *this = o; }
   Array& operator=(const Array& o) {
     if (this != &o) {
       this->reserve(o.capacity());
       this->assign(o.begin(), o.end());
       keep_warm();
+      warm_to(o.touched(), SIZE_MAX);  // as far as the original's room is faulted in
     }
     return *this;
   }
@@ -76,6 +74,19 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   void swap(Array& o) noexcept {
     Base::swap(o);
     std::swap(warmed_, o.warmed_);
+  }
+  /// Elements [0, touched()) of the room are faulted in (the elements and the room warmed ahead).
+  std::size_t touched() const { return std::max(this->size(), warmed_); }
+  /// Faults in the room up to element `target` (at most the capacity), at most `budget` bytes
+  /// of it: memory that a later step will write, faulted in by a step with time to spare
+  /// (LayoutScratch::warm). Returns the bytes it touched.
+  std::size_t warm_to(std::size_t target, std::size_t budget) {
+    const std::size_t from = touched();
+    const std::size_t to = std::min({target, this->capacity(), from + budget / sizeof(T)});
+    if (to <= from) return 0;
+    touch_pages(this->data() + from, this->data() + to);
+    warmed_ = to;
+    return (to - from) * sizeof(T);
   }
   /// Faults in the room ahead of the elements once growth has used up what was touched.
   void keep_warm() {

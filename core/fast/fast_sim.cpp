@@ -53,6 +53,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
       throw InputError("mesh is not an oriented manifold at triangle " + std::to_string(t));
   }
   topo_.euler = topo_.live_vertices() - topo_.live_mesh_edges() + topo_.live_triangles();
+  layout_scratch_.warm(topo_, par_.threads(), SIZE_MAX);  // the first relayout's memory, at load time
 }
 
 StepConstants FastSimulator::step_constants() const {
@@ -208,11 +209,24 @@ StepEvents FastSimulator::step() {
 // A relayout's phases in consecutive steps (layout.h): a stale layout starts one, and the
 // steps after finish it before another can start.
 void FastSimulator::update_layout() {
-  if (layout_phase_ == 0 && !layout_stale(topo_, layout_fraction_)) return;
+  if (layout_phase_ == 0 && !layout_stale(topo_, layout_fraction_)) return warm_layout();
   PassTimer t(pass_seconds_, int(Pass::Layout));
   relayout_phase(layout_phase_, topo_, par_, layout_scratch_);
   layout_phase_ = (layout_phase_ + 1) % kLayoutPhases;
+  ++relayout_phases_;
   colors_.invalidate();
+}
+
+// A step between relayouts faults in a part of what the next relayout will write, so that the
+// faults of the state's growth since the last one are spread over the steps in between instead
+// of landing in one step (LayoutScratch::warm): a kWarmParts-th of what is left, and at least a
+// huge page, so that it keeps up with the growth.
+void FastSimulator::warm_layout() {
+  if (layout_fraction_ < 0) return;  // no relayout to come
+  const std::size_t cold = layout_scratch_.cold_bytes(topo_, par_.threads());
+  if (cold == 0) return;
+  PassTimer t(pass_seconds_, int(Pass::Layout));
+  layout_scratch_.warm(topo_, par_.threads(), std::max(kHugePage, cold / kWarmParts));
 }
 
 std::vector<std::string> FastSimulator::pass_names() const {

@@ -107,6 +107,8 @@ class FastSimulator final : public Simulator {
   /// but for the last bits of the momentum correction (layout.h). A relayout's later phases
   /// run in the steps after its first, whatever the fraction.
   void set_layout_fraction(double f) { layout_fraction_ = f; }
+  /// Relayout phases run since construction.
+  std::uint64_t relayout_phases() const { return relayout_phases_; }
   /// Test hook: apply a pass's splits and restores one after the other instead of in parallel
   /// rounds and waves (which must give the same result, bit for bit).
   void set_serial_edits(bool on) { serial_edits_ = on; }
@@ -139,6 +141,7 @@ class FastSimulator final : public Simulator {
   void viscous_step(const StepConstants& c);  ///< the viscosity's implicit step, no force
   StepEvents adapt();
   void update_layout();    ///< a relayout's phase when one is due (layout.h)
+  void warm_layout();      ///< part of the next relayout's memory faulted in (LayoutScratch::warm)
   void adapt_decide();     ///< normals on the current state, adapt_test into decisions_, the events listed
   StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
   // The caller's manipulators (fast_manipulators.cpp).
@@ -204,6 +207,7 @@ class FastSimulator final : public Simulator {
   Manipulators manip_;                    ///< the caller's, applied every step
   double layout_fraction_ = 0.25;         ///< see set_layout_fraction
   int layout_phase_ = 0;                  ///< the relayout phase this step runs (0: when stale)
+  std::uint64_t relayout_phases_ = 0;     ///< see relayout_phases
   bool serial_edits_ = false;             ///< see set_serial_edits
   LayoutScratch layout_scratch_;          ///< relayout's reused memory (copied warm by clones)
   std::vector<std::size_t> render_scratch_;  ///< render_triangles' block starts

@@ -236,6 +236,52 @@ void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int 
   count.reserve(std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1));
 }
 
+namespace {
+/// Calls room(array, target, capacity) for each array of the scratch: how far the next relayout
+/// writes it (elements), and the capacity it must have by then. A spare takes its array's place
+/// at the swap, with its room, and keeps an eighth of that warm ahead of the elements; an
+/// order's scratch holds an entry a slot of its kind, and the slots grow until the relayout
+/// about as far as the state's arrays keep warm.
+template <class S, class F>
+void for_each_room(S& s, const Topology& m, int threads, F room) {
+  const auto ahead = [](const auto& a) { return std::min(a.capacity(), a.size() + a.capacity() / 8); };
+  const auto swapped = [&](auto& spare, const auto& a) { room(spare, ahead(a), a.capacity()); };
+  const Vertices& V = m.V;
+  swapped(s.spare_rows, V.xm), swapped(s.spare_heads, V.spring_list), swapped(s.spare_vid, V.lid);
+  swapped(s.spare_springs, V.springs), swapped(s.spare_nbrs, V.nbrs);
+  swapped(s.spare_tris, V.tris), swapped(s.spare_wings, V.wings);
+  swapped(s.spare_faces, m.T.slots), swapped(s.spare_tid, m.T.lid), swapped(s.spare_alive, m.T.alive);
+  swapped(s.spare_edges, m.E.slots), swapped(s.spare_eid, m.E.lid);
+  const std::size_t nv = ahead(V.xm), ne = ahead(m.E.slots), nt = ahead(m.T.slots);
+  for (auto* a : {&s.vorder, &s.vnew, &s.idx, &s.at_old}) room(*a, nv, nv);
+  for (auto* a : {&s.code, &s.code2}) room(*a, nv, nv);
+  for (auto* a : {&s.eorder, &s.enew}) room(*a, ne, ne);
+  for (auto* a : {&s.torder, &s.tnew}) room(*a, nt, nt);
+  room(s.key, std::max(ne, nt), std::max(ne, nt));
+  const std::size_t counts = std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1);  // stable_pass
+  room(s.count, counts, counts);
+}
+}  // namespace
+
+std::size_t LayoutScratch::warm(const Topology& m, int threads, std::size_t budget) {
+  std::size_t touched = 0;
+  for_each_room(*this, m, threads, [&](auto& a, std::size_t target, std::size_t capacity) {
+    if (touched >= budget) return;
+    if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts: not copied
+    touched += a.warm_to(target, budget - touched);
+  });
+  return touched;
+}
+
+std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {
+  std::size_t cold = 0;
+  for_each_room(*this, m, threads, [&](const auto& a, std::size_t target, std::size_t capacity) {
+    const std::size_t from = a.capacity() < capacity ? 0 : a.touched();
+    cold += (std::max(target, from) - from) * sizeof(typename std::decay_t<decltype(a)>::value_type);
+  });
+  return cold;
+}
+
 bool layout_stale(const Topology& m, double fraction) {
   if (fraction < 0) return false;
   return double(m.V.created) >= fraction * m.V.size();

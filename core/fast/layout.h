@@ -48,6 +48,18 @@ struct LayoutScratch {
   /// first relayout).
   void reserve(std::size_t nv, std::size_t ne, std::size_t nt, int threads);
 
+  /// Faults in, ahead of the next relayout, the memory it will write: each spare as far as its
+  /// array will reach when they swap (the array's elements and the room it keeps warm ahead,
+  /// Array::keep_warm), each order's scratch as far as its kind's slots then. A first touch of
+  /// memory costs far more than a write (docs/PERFORMANCE.md: on one VM 4 ms a huge page, the
+  /// time of some 20 MB of streaming), and the spares and the orders' scratch are used only by
+  /// relayouts, which would otherwise fault in all the growth since the last one in one step.
+  /// Touches at most `budget` bytes and returns how many it touched. Only between relayouts:
+  /// it may drop the scratch's contents.
+  std::size_t warm(const Topology& m, int threads, std::size_t budget);
+  /// The bytes warm() would touch with no budget.
+  std::size_t cold_bytes(const Topology& m, int threads) const;
+
   Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
   Array<int> at_old;  ///< each vertex's old block start, by new slot (repacking)
   Array<std::uint64_t> code, code2;
@@ -62,6 +74,10 @@ struct LayoutScratch {
 
 /// The phases of a relayout (above): vertices, triangles, edges.
 inline constexpr int kLayoutPhases = 3;
+
+/// A step between relayouts faults in this part (1 / kWarmParts) of the memory the next
+/// relayout will write that is not faulted in yet (LayoutScratch::warm; FastSimulator).
+inline constexpr std::size_t kWarmParts = 4;
 
 /// Runs phase `phase` (0 to kLayoutPhases - 1) of a relayout; phase 0 resets the vertices'
 /// `created` counter. Each phase sorts by the slots of the kinds before it as they are.

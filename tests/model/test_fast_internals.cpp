@@ -135,6 +135,30 @@ TEST(Layout, ScratchCopyKeepsTheRoom) {
   EXPECT_GE(b.spare_rows.capacity(), 700u);
 }
 
+// warm_to faults in the room from where the touched part ends (the elements, or room warmed
+// before) up to the target, no further than the capacity or the budget allows, and a copy is
+// touched as far as its original. Catches a warm that starts at the elements' end again (it
+// would return the bytes of room already touched), one that ignores the budget or runs past
+// the capacity, and a copy touched only as far as keep_warm's eighth.
+TEST(Array, WarmToTouchesUpToTheTargetWithinTheBudget) {
+  fast::Array<int> a;
+  a.reserve(100000);
+  a.resize(100);
+  EXPECT_EQ(a.warm_to(50000, 4000), 4000u);  // 1,000 elements
+  EXPECT_EQ(a.touched(), 1100u);
+  EXPECT_EQ(a.warm_to(50000, SIZE_MAX), 4u * 48900);
+  EXPECT_EQ(a.touched(), 50000u);
+  EXPECT_EQ(a.warm_to(40000, SIZE_MAX), 0u);
+  EXPECT_EQ(a.warm_to(200000, SIZE_MAX), 4u * 50000);  // to the capacity, no further
+  EXPECT_EQ(a.touched(), a.capacity());
+  fast::Array<int> b;  // on huge pages: a copy keeps an eighth of the room ahead warm, not all
+  b.reserve(1000000);
+  b.resize(10);
+  b.warm_to(600000, SIZE_MAX);
+  const fast::Array<int> c(b);
+  EXPECT_EQ(c.touched(), 600000u);
+}
+
 // touch_pages writes one byte in every 4 KiB page of [begin, end) and nothing outside it: a
 // write past `end` would corrupt the element after the warmed room, a skipped page would leave
 // a fault inside a step. Catches an off-by-one at either end and a stride other than the page.
@@ -550,10 +574,55 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
   sim.step();
   ASSERT_EQ(sim.check_topology(), "");
   EXPECT_TRUE(edges_in_vertex_order(m));
+  EXPECT_EQ(sim.relayout_phases(), 3u);
   // Then no phase runs until the layout is stale again.
-  const double layout_seconds = sim.pass_seconds()[int(fast::Pass::Layout)];
   sim.step();
-  EXPECT_EQ(sim.pass_seconds()[int(fast::Pass::Layout)], layout_seconds);
+  EXPECT_EQ(sim.relayout_phases(), 3u);
+}
+
+// After LayoutScratch::warm a relayout writes only memory that warm faulted in: no spare or
+// order scratch is reallocated, each is written within its touched part, and an array that
+// takes a spare's buffer finds the room ahead already warm (its keep_warm touches nothing).
+// Catches a spare or a scratch array left out of warm (it is reallocated at the relayout, or
+// written past its touched part) and targets short of what the relayout writes.
+TEST(Layout, RelayoutAfterWarmWritesOnlyWarmedMemory) {
+  Params p;
+  fast::FastSimulator sim(make_grid(40), p, 2);
+  sim.set_layout_fraction(-1);
+  for (int f = 0; f < 60; ++f) sim.step();
+  fast::Topology m = sim.topology();  // grown by splits since its last relayout
+  ASSERT_GT(m.V.created, 0);
+  fast::LayoutScratch s;
+  const fast::Parallel par(2);
+  EXPECT_GT(s.cold_bytes(m, 2), 0u);
+  s.warm(m, 2, SIZE_MAX);
+  EXPECT_EQ(s.cold_bytes(m, 2), 0u);
+  std::map<const void*, std::size_t> warmed;  // buffer -> elements touched
+  const auto note = [&](const auto&... a) { ((warmed[a.data()] = a.touched()), ...); };
+  note(s.spare_rows, s.spare_heads, s.spare_vid, s.spare_springs, s.spare_nbrs, s.spare_tris, s.spare_wings,
+       s.spare_faces, s.spare_tid, s.spare_alive, s.spare_edges, s.spare_eid);
+  note(s.vorder, s.vnew, s.idx, s.at_old, s.code, s.code2, s.eorder, s.enew, s.torder, s.tnew, s.key, s.count);
+  fast::relayout(m, par, s);
+  ASSERT_EQ(m.check(), "");
+  const auto within = [&](const char* name, const auto& a) {
+    const auto it = warmed.find(a.data());
+    ASSERT_NE(it, warmed.end()) << name << " is in a buffer warm did not prepare";
+    EXPECT_LE(a.size(), it->second) << name;
+    EXPECT_EQ(a.touched(), it->second) << name << ": its room ahead was faulted in by the relayout";
+  };
+  within("xm", m.V.xm), within("spring heads", m.V.spring_list), within("vertex ids", m.V.lid);
+  within("springs", m.V.springs), within("nbrs", m.V.nbrs), within("tris", m.V.tris), within("wings", m.V.wings);
+  within("faces", m.T.slots), within("triangle ids", m.T.lid), within("alive", m.T.alive);
+  within("edges", m.E.slots), within("edge ids", m.E.lid);
+  for (const auto* a : {&s.vorder, &s.vnew, &s.idx, &s.at_old, &s.eorder, &s.enew, &s.torder, &s.tnew, &s.key, &s.count}) {
+    const auto it = warmed.find(a->data());
+    ASSERT_NE(it, warmed.end()) << "an order's scratch was reallocated";
+    EXPECT_LE(a->size(), it->second);
+  }
+  for (const auto* a : {&s.code, &s.code2}) {
+    ASSERT_NE(warmed.find(a->data()), warmed.end()) << "the Morton codes were reallocated";
+    EXPECT_LE(a->size(), warmed[a->data()]);
+  }
 }
 
 // Splits and restores applied in parallel rounds and waves of vertex-disjoint events against
