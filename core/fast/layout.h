@@ -51,9 +51,10 @@ struct LayoutScratch {
   /// Faults in, ahead of the next relayout, the memory it will write: each spare as far as its
   /// array will reach when they swap (the array's elements and the room it keeps warm ahead,
   /// Array::keep_warm), each order's scratch as far as its kind's slots then. A first touch of
-  /// memory costs far more than a write (docs/PERFORMANCE.md: on one VM 4 ms a huge page, the
-  /// time of some 20 MB of streaming), and the spares and the orders' scratch are used only by
-  /// relayouts, which would otherwise fault in all the growth since the last one in one step.
+  /// memory can cost far more than streaming the same bytes (on a VM whose host backs the
+  /// guest's memory lazily: docs/PERFORMANCE.md), and the spares and the orders' scratch are
+  /// used only by relayouts, which would otherwise fault in all the growth since the last one in
+  /// one step.
   /// Touches at most `budget` bytes and returns how many it touched. Only between relayouts:
   /// it may drop the scratch's contents.
   std::size_t warm(const Topology& m, int threads, std::size_t budget);
