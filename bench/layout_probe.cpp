@@ -7,9 +7,9 @@
 // own timers; the layout pass's includes the steps between relayouts that fault in the next
 // one's memory, LayoutScratch::warm), the frames that ran a relayout phase (a relayout's three
 // phases run in consecutive steps, layout.h: three frames of the paper's one step a frame) and
-// the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the page faults (first touches of
-// memory, which cost some microseconds each on a VM: docs/PERFORMANCE.md) a frame and in the
-// frames that relayout.
+// the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the
+// page faults (first touches of memory, which cost some microseconds each on a VM:
+// docs/PERFORMANCE.md) a frame and in the frames that relayout.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
 #include <sys/resource.h>

@@ -88,6 +88,14 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     warmed_ = to;
     return (to - from) * sizeof(T);
   }
+  /// The bytes warm_to(target) would touch with no budget.
+  std::size_t cold_bytes(std::size_t target) const {
+    const std::size_t to = std::min(target, this->capacity()), from = touched();
+    return to > from ? (to - from) * sizeof(T) : 0;
+  }
+  /// Where keep_warm keeps room on huge pages faulted in to: an eighth of the capacity ahead of
+  /// the elements (some twenty frames of a crumple's growth).
+  std::size_t eighth_ahead() const { return std::min(this->capacity(), this->size() + this->capacity() / 8); }
   /// Faults in the room ahead of the elements once growth has used up what was touched.
   void keep_warm() {
     const std::size_t n = this->size();
@@ -95,7 +103,7 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     // Room smaller than a huge page is faulted in whole: it is on small pages, whose faults cost
     // the most (docs/PERFORMANCE.md), and it holds at most kHugePage bytes.
     const bool small_pages = this->capacity() * sizeof(T) < kHugePage;
-    warmed_ = small_pages ? this->capacity() : std::min(this->capacity(), n + this->capacity() / 8);
+    warmed_ = small_pages ? this->capacity() : eighth_ahead();
     // A write a page, not a value-initialization of every element of the room: the elements are
     // initialized when growth constructs them.
     touch_pages(this->data() + n, this->data() + warmed_);

@@ -244,7 +244,7 @@ namespace {
 /// about as far as the state's arrays keep warm.
 template <class S, class F>
 void for_each_room(S& s, const Topology& m, int threads, F room) {
-  const auto ahead = [](const auto& a) { return std::min(a.capacity(), a.size() + a.capacity() / 8); };
+  const auto ahead = [](const auto& a) { return a.eighth_ahead(); };
   const auto swapped = [&](auto& spare, const auto& a) { room(spare, ahead(a), a.capacity()); };
   const Vertices& V = m.V;
   swapped(s.spare_rows, V.xm), swapped(s.spare_heads, V.spring_list), swapped(s.spare_vid, V.lid);
@@ -276,8 +276,8 @@ std::size_t LayoutScratch::warm(const Topology& m, int threads, std::size_t budg
 std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {
   std::size_t cold = 0;
   for_each_room(*this, m, threads, [&](const auto& a, std::size_t target, std::size_t capacity) {
-    const std::size_t from = a.capacity() < capacity ? 0 : a.touched();
-    cold += (std::max(target, from) - from) * sizeof(typename std::decay_t<decltype(a)>::value_type);
+    // A spare whose array has more room is reallocated empty by warm: all of it is cold.
+    cold += a.capacity() < capacity ? target * sizeof(typename std::decay_t<decltype(a)>::value_type) : a.cold_bytes(target);
   });
   return cold;
 }

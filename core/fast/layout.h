@@ -54,8 +54,7 @@ struct LayoutScratch {
   /// memory can cost far more than streaming the same bytes (on a VM whose host backs the
   /// guest's memory lazily: docs/PERFORMANCE.md), and the spares and the orders' scratch are
   /// used only by relayouts, which would otherwise fault in all the growth since the last one in
-  /// one step.
-  /// Touches at most `budget` bytes and returns how many it touched. Only between relayouts:
+  /// one step. Touches at most `budget` bytes and returns how many it touched. Only between relayouts:
   /// it may drop the scratch's contents.
   std::size_t warm(const Topology& m, int threads, std::size_t budget);
   /// The bytes warm() would touch with no budget.
