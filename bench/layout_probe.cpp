@@ -83,12 +83,6 @@ RunResult run(const FastSimulator& prepared, const crumple::Params& params, int 
   return r;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 /// Per fraction, the medians over the rounds of each run's figures.
 void print_medians(const std::map<double, std::vector<RunResult>>& results, int rounds) {
   std::printf("\nmedians over %d rounds (ms a frame; longest: a run's longest frame; layout_frames: frames that ran "
@@ -101,7 +95,7 @@ void print_medians(const std::map<double, std::vector<RunResult>>& results, int 
     auto med = [&](auto get) {
       std::vector<double> v;
       for (const RunResult& r : runs) v.push_back(get(r));
-      return median(v);
+      return crumple::bench::median(v);
     };
     std::printf("%-9g %8.2f %8.2f %13.1f %8.1f", fraction, med([](const RunResult& r) { return r.frame_ms; }),
                 med([](const RunResult& r) { return r.longest_frame_ms; }),

@@ -1,11 +1,13 @@
-// What the benchmarks and the probes (crumple_layout_probe, crumple_placement_probe) share
-// without Google Benchmark: the prepared point where their timed frames start, and the probes'
-// argument parsing.
+// What the benchmarks and the probes (crumple_layout_probe, crumple_placement_probe,
+// crumple_relayout_probe) share without Google Benchmark: the prepared point where their timed
+// frames start, the probes' argument parsing and their medians.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <vector>
 
 #include "model/params.h"
 
@@ -32,6 +34,13 @@ inline double parse_number(const char* program, const char* text, const char* wh
     std::exit(2);
   }
   return v;
+}
+
+/// The median of v (the mean of the middle two when their count is even).
+inline double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 }  // namespace crumple::bench

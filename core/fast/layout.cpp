@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
 #include <utility>
 
 #include "fast/radix.h"
@@ -28,6 +29,22 @@ std::uint64_t spread3(std::uint64_t v) {
   v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
   v = (v | v << 2) & 0x1249249249249249ULL;
   return v;
+}
+
+/// Spreads the low 32 bits of v to every second bit (one axis of a 2-D Morton code).
+std::uint64_t spread2(std::uint64_t v) {
+  v &= 0xffffffffULL;
+  v = (v | v << 16) & 0x0000ffff0000ffffULL;
+  v = (v | v << 8) & 0x00ff00ff00ff00ffULL;
+  v = (v | v << 4) & 0x0f0f0f0f0f0f0f0fULL;
+  v = (v | v << 2) & 0x3333333333333333ULL;
+  v = (v | v << 1) & 0x5555555555555555ULL;
+  return v;
+}
+
+/// One axis's cell spread for a Morton code of `axes` interleaved axes (1 to 3).
+std::uint64_t spread(std::uint64_t cell, int axes) {
+  return axes == 3 ? spread3(cell) : axes == 2 ? spread2(cell) : cell;
 }
 
 /// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits) into `order`, in as
@@ -199,28 +216,40 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (const auto& q : bounds)
     for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], q[d]), hi[d] = std::max(hi[d], q[3 + d]);
-  // Resolution: a sheet of n vertices has about sqrt(n) per axis; four times that per axis.
+  // Resolution: a sheet of n vertices has about sqrt(n) per axis; four times that per axis. A
+  // live coordinate's cell is at most top, one short of all ones, so that the all-ones code,
+  // the dead slots', sorts after every live vertex without a bit of its own.
   const int bits = std::clamp(int(std::ceil(std::log2(std::max(n, 2)) / 2)) + 2, 4, 21);
+  const std::uint64_t top = (std::uint64_t(1) << bits) - 2;
   const double extent = std::max({double(hi[0]) - lo[0], double(hi[1]) - lo[1], double(hi[2]) - lo[2], 1e-30});
-  const double scale = double((1 << bits) - 1) / extent;
+  const double scale = double(top) / extent;
+  // Only the axes along which the live vertices span a cell or more are interleaved: a sheet
+  // at rest is flat, and an axis without extent would only add radix passes.
+  std::array<int, 3> axis{0, 1, 2};
+  int axes = 0;
+  for (int d = 0; d < 3; ++d)
+    if ((double(hi[d]) - lo[d]) * scale >= 1) axis[std::size_t(axes++)] = d;
+  axes = std::max(axes, 1);
+  const std::uint64_t dead = (std::uint64_t(1) << (axes * bits)) - 1;
   resize_scratch(s.code, n);
   par.run(n, kGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
       if (!(V.mass(v) > 0)) {
-        s.code[v] = std::uint64_t(1) << (3 * bits);  // after every live vertex
+        s.code[v] = dead;
         continue;
       }
       const Float4 X = V.rest[v];
       const float r[3] = {X.x, X.y, X.z};
       std::uint64_t code = 0;
-      for (int d = 0; d < 3; ++d) {
-        const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double((1 << bits) - 1));
-        code |= spread3(std::uint64_t(q)) << d;
+      for (int k = 0; k < axes; ++k) {
+        const int d = axis[std::size_t(k)];
+        const double q = std::clamp((double(r[d]) - lo[d]) * scale, 0.0, double(top));
+        code |= spread(std::uint64_t(q), axes) << k;
       }
       s.code[v] = code;
     }
   });
-  radix_order(par, s, 3 * bits + 1, s.vorder);
+  radix_order(par, s, axes * bits, s.vorder);
 }
 
 }  // namespace
@@ -229,7 +258,7 @@ void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int 
   for (auto* v : {&vorder, &vnew, &idx, &at_old}) v->reserve(nv);
   for (auto* v : {&eorder, &enew}) v->reserve(ne);
   for (auto* v : {&torder, &tnew}) v->reserve(nt);
-  key.reserve(std::max(ne, nt));
+  key.reserve(nt);
   code.reserve(nv);
   code2.reserve(nv);
   // The counting sorts' histograms: a block's counts per vertex slot (radix.h's stable_pass).
@@ -257,7 +286,7 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
   for (auto* a : {&s.code, &s.code2}) room(*a, nv, nv);
   for (auto* a : {&s.eorder, &s.enew}) room(*a, ne, ne);
   for (auto* a : {&s.torder, &s.tnew}) room(*a, nt, nt);
-  room(s.key, std::max(ne, nt), std::max(ne, nt));
+  room(s.key, nt, nt);  // the triangles' sort keys (the edge order needs none)
   const std::size_t counts = std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1);  // stable_pass
   room(s.count, counts, counts);
 }
@@ -357,16 +386,57 @@ void triangle_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   inverse(par, s.torder, s.tnew);
 }
 
+/// The springs in v's list whose other end has a higher slot: each live edge is listed once at
+/// each end (Topology::check), so once at its lower end.
+int owned_springs(const Vertices& V, int v) {
+  const ListHead h = V.spring_list[v];
+  const std::int32_t* nbr = &V.nbrs[std::size_t(h.at)];
+  int owned = 0;
+  for (int w = 0; w < h.count; ++w) owned += nbr[w] > v;
+  return owned;
+}
+
 /// Phase three's order and its inverse (s.enew[old] = new): edges by their lower endpoint's
-/// slot (a counting sort), dead ones last.
+/// slot, in each vertex's spring list order, dead ones last in free-list order. Read from the
+/// spring lists that phase one packed in vertex order (two streaming passes over them, a fixed
+/// block of vertices at a time) rather than sorted by a key over every edge record: the passes
+/// gather an edge's endpoints, not its neighbours in slot order, so any order within one lower
+/// endpoint serves locality, and none changes a bit of what a step computes.
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
-  const Edges& E = m.E;
-  const int nv = m.V.size(), ne = E.size();
-  resize_scratch(s.key, ne);
-  par.run(ne, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) s.key[k] = (E[k].flags & kAlive) ? std::min(E[k].a, E[k].b) : nv;
+  const Vertices& V = m.V;
+  const int nv = V.size(), ne = m.E.size();
+  const int blocks = Parallel::blocks_of(nv, kGrain);
+  resize_scratch(s.count, std::size_t(blocks) + 1);
+  par.run_blocks(nv, kGrain, [&](int b, int begin, int end) {
+    int owned = 0;
+    for (int v = begin; v < end; ++v) owned += owned_springs(V, v);
+    s.count[std::size_t(b) + 1] = owned;
   });
-  counting_order(par, s, nv + 1, s.eorder);
+  s.count[0] = 0;
+  for (int b = 0; b < blocks; ++b) s.count[std::size_t(b) + 1] += s.count[std::size_t(b)];
+  const int live = s.count[std::size_t(blocks)];
+  if (live + int(m.E.free_ids.size()) != ne)
+    throw std::logic_error("relayout: the spring lists do not hold every live edge once at its lower end");
+  resize_scratch(s.eorder, ne);
+  par.run_blocks(nv, kGrain, [&](int b, int begin, int end) {
+    // Every spring is written at the block's next place and only an owned one advances it (no
+    // branch to mispredict on the half that is not owned); the block's last place belongs to
+    // the next block, so writes there go to a dummy.
+    int* __restrict order = s.eorder.data();
+    const int last = s.count[std::size_t(b) + 1];
+    int at = s.count[std::size_t(b)], dummy = 0;
+    for (int v = begin; v < end; ++v) {
+      const ListHead h = V.spring_list[v];
+      const std::int32_t* spring = &V.springs[std::size_t(h.at)];
+      const std::int32_t* nbr = &V.nbrs[std::size_t(h.at)];
+      for (int w = 0; w < h.count; ++w) {
+        *(at < last ? &order[at] : &dummy) = spring[w] >> 1;
+        at += nbr[w] > v;
+      }
+    }
+  });
+  int at = live;
+  for (int id : m.E.free_ids) s.eorder[at++] = m.E.phys[std::size_t(id)];
   inverse(par, s.eorder, s.enew);
 }
 

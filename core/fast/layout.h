@@ -11,11 +11,12 @@
 // order and every value, so a step after it computes bit for bit what it would have without it,
 // except for the sums over all vertices whose block order follows the slots (the momentum
 // correction of DECISIONS.md D2). Vertices go along a Morton (Z-order) curve of their rest
-// positions: the sheet's material coordinates, where neighbours are near each other however the
-// sheet is crumpled, and where an inserted vertex lies between its parents [Eq 7]. Edges then
-// follow their lower endpoint and triangles their lowest corner (counting sorts), dead elements
-// last. The cost is a few passes over the state, so it runs only when enough elements were
-// created since the last one (FastSimulator's layout fraction).
+// positions (over the axes the sheet spans): the sheet's material coordinates, where neighbours
+// are near each other however the sheet is crumpled, and where an inserted vertex lies between
+// its parents [Eq 7]. Edges then follow their lower endpoint (read from the spring lists) and
+// triangles their lowest corner (a counting sort), dead elements last. The cost is a few passes
+// over the state, so it runs only when enough elements were created since the last one
+// (FastSimulator's layout fraction).
 //
 // It runs in three phases, each a complete permutation of one kind of element that renames
 // every reference to it and leaves a valid topology, so that a simulator can run them in
