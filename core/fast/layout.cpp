@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <climits>
 #include <stdexcept>
 #include <utility>
 
@@ -47,7 +48,7 @@ std::uint64_t spread(std::uint64_t cell, int axes) {
   return axes == 3 ? spread3(cell) : axes == 2 ? spread2(cell) : cell;
 }
 
-/// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits) into `order`, in as
+/// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits, at least one) into `order`, in as
 /// few passes of at most kMaxDigit bits as cover them (stable: the order is the same whatever
 /// the digits).
 void radix_order(const Parallel& par, LayoutScratch& s, int bits, Array<int>& order) {
@@ -55,16 +56,16 @@ void radix_order(const Parallel& par, LayoutScratch& s, int bits, Array<int>& or
   resize_scratch(order, n);
   resize_scratch(s.idx, n);
   resize_scratch(s.code2, n);
-  for (int k = 0; k < n; ++k) order[k] = k;
   const RadixDigits d = radix_digits(bits);
   const int digit_bits = d.bits;
   const std::uint64_t mask = (std::uint64_t(1) << digit_bits) - 1;
   for (int shift = 0; shift < bits; shift += digit_bits) {
     const std::uint64_t* code = s.code.data();
     auto digit = [&](int k) { return int((code[k] >> shift) & mask); };
+    const bool first = shift == 0;  // the order is the identity before the first pass
     stable_pass(par, s.count, n, 1 << digit_bits, digit, [&](int k, int to) {
       s.code2[to] = code[k];
-      s.idx[to] = order[k];
+      s.idx[to] = first ? k : order[k];
     });
     s.code.swap(s.code2);
     order.swap(s.idx);
@@ -162,32 +163,46 @@ struct Pool {
 /// now in slot k (heads already permuted) gets a block of room_for(count) entries, the blocks
 /// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
 /// left. f and g rename the entries of list and parallel; both pools are copied in one loop.
+/// The blocks' starts are a prefix sum over fixed blocks of vertices (each block's total, the
+/// totals summed in order, then each block's heads), so no loop over every vertex is serial.
 template <class F, class G>
 void repack(const Parallel& par, LayoutScratch& s, Pool list, Pool parallel, Array<ListHead>& heads, F f, G g) {
   const int n = int(heads.size());
-  resize_scratch(s.at_old, n);
-  std::int64_t total = 0;  // a serial prefix sum: a few ns per vertex, and relayout is rare
-  for (int k = 0; k < n; ++k) {
-    ListHead& h = heads[k];
-    s.at_old[k] = h.at;
-    h.room = std::uint16_t(room_for(h.count));
-    h.at = std::int32_t(total);
-    total += h.room;
+  const int blocks = Parallel::blocks_of(n, kGrain);
+  resize_scratch(s.count, std::size_t(blocks) + 1);  // each block's first entry
+  int* __restrict start = s.count.data();
+  par.run_blocks(n, kGrain, [&](int b, int begin, int end) {
+    int room = 0;
+    for (int k = begin; k < end; ++k) room += room_for(heads[k].count);
+    start[b + 1] = room;
+  });
+  std::int64_t total = start[0] = 0;
+  for (int b = 0; b < blocks; ++b) {
+    total += start[b + 1];
+    if (total > INT32_MAX) throw std::length_error("relayout: an adjacency pool needs 2^31 entries or more");
+    start[b + 1] = int(total);
   }
   std::int32_t* __restrict to_list = ready_spare(list.spare, list.a, std::size_t(total));
   std::int32_t* __restrict to_parallel = ready_spare(parallel.spare, parallel.a, std::size_t(total));
   const std::int32_t* __restrict from_list = list.a.data();
   const std::int32_t* __restrict from_parallel = parallel.a.data();
-  const ListHead* __restrict head = heads.data();
-  const std::int32_t* __restrict at_old = s.at_old.data();
-  par.run(n, kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      if (k + kAhead < e) __builtin_prefetch(&from_list[at_old[k + kAhead]]), __builtin_prefetch(&from_parallel[at_old[k + kAhead]]);
-      const int from = at_old[k], to = head[k].at, count = head[k].count;
+  ListHead* __restrict head = heads.data();
+  par.run_blocks(n, kGrain, [&](int b, int begin, int end) {
+    int to = start[b];
+    for (int k = begin; k < end; ++k) {
+      if (k + kAhead < end) {  // a head this block has not rewritten yet: it still holds the old start
+        const int ahead = head[k + kAhead].at;
+        __builtin_prefetch(&from_list[ahead]), __builtin_prefetch(&from_parallel[ahead]);
+      }
+      ListHead& h = head[k];
+      const int from = h.at, count = h.count;
       for (int w = 0; w < count; ++w) {
         to_list[to + w] = f(from_list[from + w]);
         to_parallel[to + w] = g(from_parallel[from + w]);
       }
+      h.at = to;
+      h.room = std::uint16_t(room_for(count));
+      to += h.room;
     }
   });
   list.a.swap(list.spare);
@@ -255,7 +270,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
 }  // namespace
 
 void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int threads) {
-  for (auto* v : {&vorder, &vnew, &idx, &at_old}) v->reserve(nv);
+  for (auto* v : {&vorder, &vnew, &idx}) v->reserve(nv);
   for (auto* v : {&eorder, &enew}) v->reserve(ne);
   for (auto* v : {&torder, &tnew}) v->reserve(nt);
   key.reserve(nt);
@@ -282,7 +297,7 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
   swapped(s.spare_faces, m.T.slots), swapped(s.spare_tid, m.T.lid), swapped(s.spare_alive, m.T.alive);
   swapped(s.spare_edges, m.E.slots), swapped(s.spare_eid, m.E.lid);
   const std::size_t nv = ahead(V.xm), ne = ahead(m.E.slots), nt = ahead(m.T.slots);
-  for (auto* a : {&s.vorder, &s.vnew, &s.idx, &s.at_old}) room(*a, nv, nv);
+  for (auto* a : {&s.vorder, &s.vnew, &s.idx}) room(*a, nv, nv);
   for (auto* a : {&s.code, &s.code2}) room(*a, nv, nv);
   for (auto* a : {&s.eorder, &s.enew}) room(*a, ne, ne);
   for (auto* a : {&s.torder, &s.tnew}) room(*a, nt, nt);

@@ -62,7 +62,6 @@ struct LayoutScratch {
   std::size_t cold_bytes(const Topology& m, int threads) const;
 
   Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
-  Array<int> at_old;  ///< each vertex's old block start, by new slot (repacking)
   Array<std::uint64_t> code, code2;
   Array<ListHead> spare_heads;  ///< the vertices' list heads
   Array<Float4> spare_rows;     ///< the vertices' rows

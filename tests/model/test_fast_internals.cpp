@@ -632,7 +632,7 @@ TEST(Layout, RelayoutAfterWarmWritesOnlyWarmedMemory) {
   const auto note = [&](const auto&... a) { ((warmed[a.data()] = a.touched()), ...); };
   note(s.spare_rows, s.spare_heads, s.spare_vid, s.spare_springs, s.spare_nbrs, s.spare_tris, s.spare_wings,
        s.spare_faces, s.spare_tid, s.spare_alive, s.spare_edges, s.spare_eid);
-  note(s.vorder, s.vnew, s.idx, s.at_old, s.code, s.code2, s.eorder, s.enew, s.torder, s.tnew, s.key, s.count);
+  note(s.vorder, s.vnew, s.idx, s.code, s.code2, s.eorder, s.enew, s.torder, s.tnew, s.key, s.count);
   fast::relayout(m, par, s);
   ASSERT_EQ(m.check(), "");
   const auto within = [&](const char* name, const auto& a) {
@@ -652,7 +652,7 @@ TEST(Layout, RelayoutAfterWarmWritesOnlyWarmedMemory) {
     ASSERT_NE(it, warmed.end()) << "an order's scratch was reallocated";
     EXPECT_LE(a.size(), it->second);
   };
-  reused(s.vorder), reused(s.vnew), reused(s.idx), reused(s.at_old), reused(s.code), reused(s.code2);
+  reused(s.vorder), reused(s.vnew), reused(s.idx), reused(s.code), reused(s.code2);
   reused(s.eorder), reused(s.enew), reused(s.torder), reused(s.tnew), reused(s.key), reused(s.count);
 }
 
