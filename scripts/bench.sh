@@ -9,7 +9,7 @@
 # and copies frame_time.png to results/frame_time.png (the README's chart).
 #
 # Usage: scripts/bench.sh [--quick] [--out DIR] [-- extra crumple_bench flags]
-#   --quick   N <= 256 and fewer, shorter repetitions (about six minutes); writes to
+#   --quick   N <= 256 and fewer, shorter repetitions (6-22 minutes by machine: README); writes to
 #             results/<machine-tag>/quick/ and leaves results/frame_time.png alone
 #   --out DIR write the results there instead (results/frame_time.png is then not touched)
 # Environment: CRUMPLE_BENCH_BUILD (build folder, default build-bench), CRUMPLE_BENCH_REPS,

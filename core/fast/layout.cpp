@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstring>
-#include <climits>
 #include <stdexcept>
 #include <utility>
 
@@ -48,9 +48,9 @@ std::uint64_t spread(std::uint64_t cell, int axes) {
   return axes == 3 ? spread3(cell) : axes == 2 ? spread2(cell) : cell;
 }
 
-/// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits, at least one) into `order`, in as
-/// few passes of at most kMaxDigit bits as cover them (stable: the order is the same whatever
-/// the digits).
+/// Stable LSD radix sort of the slots 0..n-1 by code (the low `bits` bits, at least one) into
+/// `order`, in as few passes of at most kMaxDigit bits as cover them (stable: the order is the
+/// same whatever the digits).
 void radix_order(const Parallel& par, LayoutScratch& s, int bits, Array<int>& order) {
   const int n = int(s.code.size());
   resize_scratch(order, n);
@@ -87,6 +87,23 @@ void inverse(const Parallel& par, const From& order, To& of) {
   par.run(int(order.size()), kGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) of[order[k]] = k;
   });
+}
+
+/// Fills start[b] with where fixed block b of kGrain items of [0, n) begins when each block
+/// takes count(begin, end) places (start[0] = 0, start[blocks] the total, which it returns): the
+/// blocks count in parallel and only the sum over the blocks is serial.
+template <class Count>
+int block_starts(const Parallel& par, int n, Array<int>& start, Count count) {
+  const int blocks = Parallel::blocks_of(n, kGrain);
+  resize_scratch(start, std::size_t(blocks) + 1);
+  par.run_blocks(n, kGrain, [&](int b, int begin, int end) { start[std::size_t(b) + 1] = count(begin, end); });
+  std::int64_t total = start[0] = 0;
+  for (std::size_t b = 1; b <= std::size_t(blocks); ++b) {
+    total += start[b];
+    if (total > INT32_MAX) throw std::length_error("relayout: 2^31 places or more in one array");
+    start[b] = int(total);
+  }
+  return int(total);
 }
 
 /// One array of a permutation group: a[new] = rename(a[order[new]], order[new]), gathered into
@@ -163,25 +180,17 @@ struct Pool {
 /// now in slot k (heads already permuted) gets a block of room_for(count) entries, the blocks
 /// packed in slot order, so neighbouring vertices' lists share cache lines and no garbage is
 /// left. f and g rename the entries of list and parallel; both pools are copied in one loop.
-/// The blocks' starts are a prefix sum over fixed blocks of vertices (each block's total, the
-/// totals summed in order, then each block's heads), so no loop over every vertex is serial.
+/// The blocks are placed a fixed block of vertices at a time (block_starts), so no loop over
+/// every vertex is serial.
 template <class F, class G>
 void repack(const Parallel& par, LayoutScratch& s, Pool list, Pool parallel, Array<ListHead>& heads, F f, G g) {
   const int n = int(heads.size());
-  const int blocks = Parallel::blocks_of(n, kGrain);
-  resize_scratch(s.count, std::size_t(blocks) + 1);  // each block's first entry
-  int* __restrict start = s.count.data();
-  par.run_blocks(n, kGrain, [&](int b, int begin, int end) {
+  const int total = block_starts(par, n, s.count, [&](int begin, int end) {
     int room = 0;
     for (int k = begin; k < end; ++k) room += room_for(heads[k].count);
-    start[b + 1] = room;
+    return room;
   });
-  std::int64_t total = start[0] = 0;
-  for (int b = 0; b < blocks; ++b) {
-    total += start[b + 1];
-    if (total > INT32_MAX) throw std::length_error("relayout: an adjacency pool needs 2^31 entries or more");
-    start[b + 1] = int(total);
-  }
+  const int* __restrict start = s.count.data();
   std::int32_t* __restrict to_list = ready_spare(list.spare, list.a, std::size_t(total));
   std::int32_t* __restrict to_parallel = ready_spare(parallel.spare, parallel.a, std::size_t(total));
   const std::int32_t* __restrict from_list = list.a.data();
@@ -420,16 +429,11 @@ int owned_springs(const Vertices& V, int v) {
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const Vertices& V = m.V;
   const int nv = V.size(), ne = m.E.size();
-  const int blocks = Parallel::blocks_of(nv, kGrain);
-  resize_scratch(s.count, std::size_t(blocks) + 1);
-  par.run_blocks(nv, kGrain, [&](int b, int begin, int end) {
+  const int live = block_starts(par, nv, s.count, [&](int begin, int end) {
     int owned = 0;
     for (int v = begin; v < end; ++v) owned += owned_springs(V, v);
-    s.count[std::size_t(b) + 1] = owned;
+    return owned;
   });
-  s.count[0] = 0;
-  for (int b = 0; b < blocks; ++b) s.count[std::size_t(b) + 1] += s.count[std::size_t(b)];
-  const int live = s.count[std::size_t(blocks)];
   if (live + int(m.E.free_ids.size()) != ne)
     throw std::logic_error("relayout: the spring lists do not hold every live edge once at its lower end");
   resize_scratch(s.eorder, ne);
