@@ -29,6 +29,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import machine_info  # noqa: E402  (beside this script)
+
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN_FRESH = re.compile(r"^BM_FrozenFresh/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
@@ -663,7 +665,8 @@ def cpu_line(m, context):
     where recorded: a VM may name CPUs of two generations alike), CPUs, caches, clock."""
     model = m.get("model", "unknown CPU")
     if m.get("microarchitecture"):
-        model += f" ({m['microarchitecture'].replace('zen', 'Zen ')}, family {m.get('family')} model {m.get('model_number')})"
+        arch = machine_info.GENERATION_NAMES.get(m["microarchitecture"], m["microarchitecture"])
+        model += f" ({arch}, family {m.get('family')} model {m.get('model_number')})"
     hv = f", {m['hypervisor']} guest" if m.get("hypervisor") else ""
     caches = (f"L2 {m.get('l2') or '?'}, L3 {m.get('l3') or '?'}" if m.get("l2") or m.get("l3")
               else "caches not reported by lscpu")

@@ -3,7 +3,8 @@
 
   machine_info.py --tag     prints e.g. "amd-epyc-zen5_avx512" (lscpu model name, its
                             microarchitecture when the name gives no model number, as a
-                            virtual machine's "AMD EPYC" does, and the widest SIMD set)
+                            virtual machine's "AMD EPYC" or "Intel(R) Xeon(R) Processor"
+                            does, and the widest SIMD set)
   machine_info.py --json    prints a JSON object: model, tag, cores, threads_per_core, simd,
                             flags (a summary), compiler, kernel
 """
@@ -58,10 +59,23 @@ def cpu_id():
     return found.get("vendor_id", ""), number("cpu family"), number("model")
 
 
+# Intel's server cores by family 6 model number (Intel's manuals, "CPUID signature values").
+# Cascade Lake and Cooper Lake share Skylake-SP's model (they differ by stepping): one core.
+INTEL_SERVER_CORES = {0x55: "skx", 0x6A: "icx", 0x6C: "icx", 0x8F: "spr", 0xCF: "emr", 0xAD: "gnr", 0xAE: "gnr"}
+
+# How the report names each generation tag.
+GENERATION_NAMES = {"zen1": "Zen 1", "zen2": "Zen 2", "zen3": "Zen 3", "zen4": "Zen 4", "zen5": "Zen 5",
+                    "skx": "Skylake-SP", "icx": "Ice Lake-SP", "spr": "Sapphire Rapids",
+                    "emr": "Emerald Rapids", "gnr": "Granite Rapids"}
+
+
 def microarchitecture(vendor, family, model):
-    """AMD's core generation from family and model ("zen4"), or "" where not known. Virtual
-    machines often name every AMD CPU "AMD EPYC": two VM kinds of different generations would
-    otherwise share a results folder (AMD's family 19h covers Zen 3 and Zen 4 by model range)."""
+    """The core generation from vendor, family and model ("zen4", "emr"), or "" where not known.
+    Virtual machines often name every CPU of a vendor alike ("AMD EPYC", "Intel(R) Xeon(R)
+    Processor"): two VM kinds of different generations would otherwise share a results folder
+    (AMD's family 19h covers Zen 3 and Zen 4 by model range)."""
+    if vendor == "GenuineIntel":
+        return INTEL_SERVER_CORES.get(model, "") if family == 6 else ""
     if vendor != "AuthenticAMD":
         return ""
     if family == 0x17:

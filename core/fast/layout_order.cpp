@@ -72,7 +72,6 @@ void counting_order(const Parallel& par, LayoutScratch& s, int buckets, Array<in
 
 }  // namespace
 
-/// Morton order of the vertex slots by rest position, dead slots last, into s.vorder.
 void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   const int n = V.size();
   // The bounds of the live rest positions, per fixed block (min and max: the same on any
@@ -128,8 +127,7 @@ void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s) {
   radix_order(par, s, axes * bits, s.vorder);
 }
 
-/// Phase two's order and its inverse (s.tnew[old] = new): triangles by their lowest corner's
-/// slot (a counting sort), dead ones last.
+// A counting sort by the lowest corner's slot; a dead triangle's key is past every slot.
 void triangle_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const Triangles& T = m.T;
   const int nv = m.V.size(), nt = T.size();
@@ -155,12 +153,10 @@ int owned_springs(const Vertices& V, int v) {
 
 }  // namespace
 
-/// Phase three's order and its inverse (s.enew[old] = new): edges by their lower endpoint's
-/// slot, in each vertex's spring list order, dead ones last in free-list order. Read from the
-/// spring lists that phase one packed in vertex order (two streaming passes over them, a fixed
-/// block of vertices at a time) rather than sorted by a key over every edge record: the passes
-/// gather an edge's endpoints, not its neighbours in slot order, so any order within one lower
-/// endpoint serves locality, and none changes a bit of what a step computes.
+// Read from the spring lists that phase one packed in vertex order (two streaming passes over
+// them, a fixed block of vertices at a time) rather than sorted by a key over every edge record:
+// the passes gather an edge's endpoints, not its neighbours in slot order, so any order within
+// one lower endpoint serves locality, and none changes a bit of what a step computes.
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   const Vertices& V = m.V;
   const int nv = V.size(), ne = m.E.size();

@@ -40,12 +40,14 @@ int block_starts(const Parallel& par, int n, Array<int>& start, Count count) {
   return int(total);
 }
 
-/// Phase one's order: the vertex slots along a Morton curve of their rest positions, dead slots
-/// last, into s.vorder.
+/// Phase one's order: the vertex slots along a Morton curve of their rest positions (over the
+/// axes along which the live ones span a cell), dead slots last, into s.vorder.
 void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s);
-/// Phase two's order and its inverse (s.torder, s.tnew): triangles by their lowest corner's slot.
+/// Phase two's order and its inverse (s.torder, s.tnew[old] = new): triangles by their lowest
+/// corner's slot, dead ones last.
 void triangle_order(const Topology& m, const Parallel& par, LayoutScratch& s);
-/// Phase three's order and its inverse (s.eorder, s.enew): edges by their lower endpoint's slot.
+/// Phase three's order and its inverse (s.eorder, s.enew[old] = new): edges by their lower
+/// endpoint's slot, in each vertex's spring list order, dead ones last in free-list order.
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s);
 
 }  // namespace crumple::fast::layout_order

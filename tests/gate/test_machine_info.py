@@ -1,7 +1,9 @@
 """scripts/machine_info.py's results-folder tag. Wrong code this catches: two core generations
 behind one generic VM model name ("AMD EPYC") given one tag, so that a run on one overwrites the
 other's results; AMD family 19h's Zen 3 and Zen 4 model ranges confused; a generation appended
-to a name that has a model number (the folder of a named CPU would change for nothing)."""
+to a name that has a model number (the folder of a named CPU would change for nothing); an Intel
+model number read without its family 6, or a client core (model 151, Alder Lake) taken for a
+server one."""
 import os
 import sys
 import unittest
@@ -27,8 +29,16 @@ class Tag(unittest.TestCase):
     def test_a_model_number_needs_no_generation(self):
         self.assertEqual(tag("AMD EPYC 9654 96-Core Processor", ("AuthenticAMD", 25, 0x11)), "amd-epyc-9654_avx512")
 
+    def test_intel_generations_behind_one_generic_name_differ(self):
+        xeon = "Intel(R) Xeon(R) Processor"
+        self.assertEqual(tag(xeon, ("GenuineIntel", 6, 207)), "intel-xeon-emr_avx512")
+        self.assertEqual(tag(xeon, ("GenuineIntel", 6, 143)), "intel-xeon-spr_avx512")
+        self.assertEqual(tag(xeon, ("GenuineIntel", 6, 85)), "intel-xeon-skx_avx512")
+        self.assertEqual(tag("Intel(R) Xeon(R) Gold 6430", ("GenuineIntel", 6, 143)), "intel-xeon-gold-6430_avx512")
+
     def test_unknown_generations_keep_the_plain_name(self):
-        self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 6, 143)), "intel-xeon_avx512")
+        self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 6, 151)), "intel-xeon_avx512")
+        self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 15, 207)), "intel-xeon_avx512")
         self.assertEqual(tag("AMD EPYC", ("", -1, -1)), "amd-epyc_avx512")
 
 

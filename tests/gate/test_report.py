@@ -125,6 +125,11 @@ class CpuLine(unittest.TestCase):
         self.assertTrue(line.startswith("AMD EPYC (Zen 5, family 26 model 2);"), line)
         self.assertIn("L2 2 MiB, L3 32 MiB", line)
 
+    def test_an_intel_generation_is_named_in_words(self):
+        line = bench_report.cpu_line({"model": "Intel(R) Xeon(R) Processor", "microarchitecture": "emr",
+                                      "family": 6, "model_number": 207}, {})
+        self.assertTrue(line.startswith("Intel(R) Xeon(R) Processor (Emerald Rapids, family 6 model 207);"), line)
+
     def test_missing_caches_are_said_missing(self):
         line = bench_report.cpu_line({"model": "AMD EPYC", "l2": "", "l3": ""}, {})
         self.assertIn("caches not reported by lscpu", line)

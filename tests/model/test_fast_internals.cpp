@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <map>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -320,16 +321,24 @@ void same_events(const std::vector<StepEvents>& a, const std::vector<StepEvents>
   }
 }
 
-/// Mean |slot(a) - slot(b)| over live edges: how far apart neighbours are stored.
+/// Steps `frames` frames with the relayout off: the slots keep every vertex, edge and triangle
+/// that the splits appended, in the order they came.
+void grow_without_relayouts(fast::FastSimulator& sim, int frames) {
+  sim.set_layout_fraction(-1);
+  for (int f = 0; f < frames; ++f) sim.step();
+}
+
+/// |slot(a) - slot(b)| of every live edge: how far apart neighbours are stored.
+std::vector<int> slot_distances(const fast::Topology& m) {
+  std::vector<int> d;
+  for (int e = 0; e < m.E.size(); ++e)
+    if (m.E[e].flags & fast::kAlive) d.push_back(std::abs(m.E[e].a - m.E[e].b));
+  return d;
+}
+
 double mean_slot_distance(const fast::Topology& m) {
-  double sum = 0;
-  int n = 0;
-  for (int e = 0; e < m.E.size(); ++e) {
-    if (!(m.E[e].flags & fast::kAlive)) continue;
-    sum += std::abs(m.E[e].a - m.E[e].b);
-    ++n;
-  }
-  return sum / n;
+  const std::vector<int> d = slot_distances(m);
+  return std::accumulate(d.begin(), d.end(), 0.0) / double(d.size());
 }
 
 // The sphere crumple with symplectic Euler (no momentum correction, whose block sums follow
@@ -458,8 +467,7 @@ TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
   };
   auto relaid = [&](int threads) {  // one simulator alive at a time (see RelayoutEveryStep...)
     fast::FastSimulator sim(make_grid(192), p, threads);
-    sim.set_layout_fraction(-1);
-    for (int f = 0; f < 40; ++f) sim.step();
+    grow_without_relayouts(sim, 40);
     sim.run_pass(fast::Pass::Layout);
     EXPECT_EQ(sim.check_topology(), "");
     const fast::Topology& m = sim.topology();
@@ -479,8 +487,7 @@ TEST(Layout, SlotOrderIsTheSameOnAnyThreadCount) {
 TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 1);
-  sim.set_layout_fraction(-1);
-  for (int f = 0; f < 60; ++f) sim.step();
+  grow_without_relayouts(sim, 60);
   fast::FastSimulator moved(sim);
   const double before = mean_slot_distance(moved.topology());
   moved.run_pass(fast::Pass::Layout);
@@ -519,11 +526,8 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   EXPECT_LT(worst, 1e-6);
 }
 
-// The median over live edges of the distance between their endpoints' slots.
 double median_slot_distance(const fast::Topology& m) {
-  std::vector<int> d;
-  for (int e = 0; e < m.E.size(); ++e)
-    if (m.E[e].flags & fast::kAlive) d.push_back(std::abs(m.E[e].a - m.E[e].b));
+  std::vector<int> d = slot_distances(m);
   std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
   return d[d.size() / 2];
 }
@@ -537,8 +541,7 @@ double median_slot_distance(const fast::Topology& m) {
 TEST(Layout, VertexOrderIsACurveOverTheSheetWithTheDeadLast) {
   Params p;
   fast::FastSimulator sim(make_grid(32), p, 2);
-  sim.set_layout_fraction(-1);
-  for (int f = 0; f < 90; ++f) sim.step();
+  grow_without_relayouts(sim, 90);
   const fast::Topology& m = sim.topology();
   ASSERT_GT(m.V.free_ids.size(), 0u);  // restores freed vertex slots
   sim.run_pass(fast::Pass::Layout);
@@ -582,8 +585,7 @@ bool edges_in_vertex_order(const fast::Topology& m) {
 TEST(Layout, PhasesRunInConsecutiveSteps) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 2);
-  sim.set_layout_fraction(-1);
-  for (int f = 0; f < 60; ++f) sim.step();
+  grow_without_relayouts(sim, 60);
   const fast::Topology& m = sim.topology();
   ASSERT_GT(m.V.created, 0);
   ASSERT_FALSE(triangles_in_vertex_order(m));  // splits appended triangles and edges
@@ -619,8 +621,7 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
 TEST(Layout, RelayoutAfterWarmWritesOnlyWarmedMemory) {
   Params p;
   fast::FastSimulator sim(make_grid(40), p, 2);
-  sim.set_layout_fraction(-1);
-  for (int f = 0; f < 60; ++f) sim.step();
+  grow_without_relayouts(sim, 60);
   fast::Topology m = sim.topology();  // grown by splits since its last relayout
   ASSERT_GT(m.V.created, 0);
   fast::LayoutScratch s;
