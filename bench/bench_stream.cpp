@@ -1,6 +1,6 @@
 // BM_Stream/<kernel>/<threads>/<MiB>: the machine's streaming bandwidth, STREAM-like, measured
 // in the same run as the frames so that scripts/bench_report.py can set each pass's achieved
-// bandwidth against it (the roofline). Kernels over arrays of doubles, each kArrayMiB:
+// bandwidth against it (the roofline). Kernels over arrays of doubles, each array_mib():
 //   read   s += a[i]            8 bytes per element
 //   copy   c[i] = a[i]          16 bytes (STREAM's count: the write-allocate read is not counted)
 //   triad  a[i] = b[i] + q c[i] 24 bytes (idem)
@@ -9,16 +9,20 @@
 //                               scattered reads of rows; the index stream is not counted)
 // The gather is no streaming kernel: it is the rate at which the machine serves lines at random,
 // the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
-// Each array is 128 MiB, four times the largest L3 this runs on (32 MiB per Zen CCD), so every
-// pass comes from memory; allocated as the fast backend's state is (on huge pages where the
-// kernel gives them: with 4 KiB pages the gather's lines also miss the TLB). Threads as in the
-// other benchmarks: tbb::global_control caps the parallelism at T; the range is cut into T equal static chunks (static_partitioner), the same
-// chunks that first touched the pages, so each thread streams the memory it faulted in.
+// Each array is at least four times the L3 that the machine reports (128 MiB on a 32 MiB Zen L3
+// or where none is reported, 1,152 MiB on a 260 MiB Xeon L3), so every pass comes from memory,
+// not from a cache that holds a whole array; allocated as the fast backend's state is (on huge
+// pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB).
+// Threads as in the other benchmarks: tbb::global_control caps the parallelism at T; the range
+// is cut into T equal static chunks (static_partitioner), the same chunks that first touched
+// the pages, so each thread streams the memory it faulted in.
 // Reported: bytes_per_second (a kIsRate counter of the bytes above: GB/s in the report), and
 // the time per pass (manual time, steady_clock).
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/partitioner.h>
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstring>
@@ -34,8 +38,17 @@
 namespace crumple::bench {
 namespace {
 
-constexpr std::size_t kArrayMiB = 128;
-constexpr std::size_t kElements = kArrayMiB * 1024 * 1024 / sizeof(double);
+constexpr std::size_t kMinArrayMiB = 128, kCacheMultiple = 4;
+
+/// Each array's size in MiB: kCacheMultiple times the L3 that sysconf reports (glibc reads it
+/// from cpuid; 0 where the VM reports none), rounded up to a multiple of kMinArrayMiB, at least
+/// kMinArrayMiB. A name carries it (BM_Stream/read/2/128), so runs on one machine compare.
+std::size_t array_mib() {
+  const long l3 = sysconf(_SC_LEVEL3_CACHE_SIZE);
+  const std::size_t want = l3 > 0 ? kCacheMultiple * std::size_t(l3) / (1024 * 1024) : 0;
+  return std::max<std::size_t>(1, (want + kMinArrayMiB - 1) / kMinArrayMiB) * kMinArrayMiB;
+}
+const std::size_t kElements = array_mib() * 1024 * 1024 / sizeof(double);
 
 /// The read kernel's sums: kAccumulators vectors of kLaneCount doubles (one AVX-512 register).
 typedef double Lanes __attribute__((vector_size(64)));
@@ -43,9 +56,10 @@ constexpr std::size_t kLaneCount = sizeof(Lanes) / sizeof(double), kAccumulators
 constexpr std::size_t kStep = kLaneCount * kAccumulators;
 
 enum class Kernel { Read, Copy, Triad, Gather };
-constexpr std::size_t kLineDoubles = 64 / sizeof(double), kLines = kElements / kLineDoubles;
+constexpr std::size_t kLineDoubles = 64 / sizeof(double);
+const std::size_t kLines = kElements / kLineDoubles;
 /// Bytes a pass moves, as STREAM counts them (the gather: every line it reads, whole).
-constexpr double pass_bytes(Kernel k) {
+double pass_bytes(Kernel k) {
   return k == Kernel::Gather ? 64.0 * double(kLines)
                              : double(kElements) * (k == Kernel::Read ? 8 : k == Kernel::Copy ? 16 : 24);
 }
@@ -163,7 +177,7 @@ void register_stream_benchmarks() {
   for (const auto& [label, kernel] : kernels)
     for (int threads : {1, 2}) {
       const std::string name = std::string("BM_Stream/") + label + "/" + std::to_string(threads) + "/" +
-                               std::to_string(kArrayMiB);
+                               std::to_string(kElements * sizeof(double) / (1024 * 1024));
       benchmark::RegisterBenchmark(name.c_str(), BM_Stream, kernel, threads)
           ->Unit(benchmark::kMillisecond)
           ->UseManualTime();
