@@ -1,6 +1,6 @@
 // BM_Stream/<kernel>/<threads>/<MiB>: the machine's streaming bandwidth, STREAM-like, measured
 // in the same run as the frames so that scripts/bench_report.py can set each pass's achieved
-// bandwidth against it (the roofline). Kernels over arrays of doubles, each array_mib():
+// bandwidth against it (the roofline). Kernels over arrays of doubles, each kArrayMiB:
 //   read   s += a[i]            8 bytes per element
 //   copy   c[i] = a[i]          16 bytes (STREAM's count: the write-allocate read is not counted)
 //   triad  a[i] = b[i] + q c[i] 24 bytes (idem)
@@ -9,13 +9,14 @@
 //                               scattered reads of rows; the index stream is not counted)
 // The gather is no streaming kernel: it is the rate at which the machine serves lines at random,
 // the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
-// Each array is at least four times the L3 that the machine reports (128 MiB on a 32 MiB Zen L3
-// or where none is reported, 1,152 MiB on a 260 MiB Xeon L3), so every pass comes from memory,
-// not from a cache that holds a whole array; allocated as the fast backend's state is (on huge
-// pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB).
-// Threads as in the other benchmarks: tbb::global_control caps the parallelism at T; the range
-// is cut into T equal static chunks (static_partitioner), the same chunks that first touched
-// the pages, so each thread streams the memory it faulted in.
+// Each array is four times the L3 that the machine reports, rounded up to a multiple of 128 MiB
+// (128 MiB on a 32 MiB Zen L3 or where none is reported, 1,152 MiB on a 260 MiB Xeon L3;
+// array_mib), so every pass comes from memory, not from a cache that holds a whole array;
+// allocated as the fast backend's state is (on huge pages where the kernel gives them: with
+// 4 KiB pages the gather's lines also miss the TLB). Threads as in the other benchmarks:
+// tbb::global_control caps the parallelism at T; the range is cut into T equal static chunks
+// (static_partitioner), the same chunks that first touched the pages, so each thread streams
+// the memory it faulted in.
 // Reported: bytes_per_second (a kIsRate counter of the bytes above: GB/s in the report), and
 // the time per pass (manual time, steady_clock).
 #include <oneapi/tbb/global_control.h>
@@ -39,16 +40,25 @@ namespace crumple::bench {
 namespace {
 
 constexpr std::size_t kMinArrayMiB = 128, kCacheMultiple = 4;
+/// The three arrays together take at most this share of the machine's memory.
+constexpr std::size_t kMemoryShare = 4;
 
 /// Each array's size in MiB: kCacheMultiple times the L3 that sysconf reports (glibc reads it
 /// from cpuid; 0 where the VM reports none), rounded up to a multiple of kMinArrayMiB, at least
-/// kMinArrayMiB. A name carries it (BM_Stream/read/2/128), so runs on one machine compare.
+/// kMinArrayMiB, and the three arrays within 1 / kMemoryShare of the physical memory (rounded
+/// down, but never below kMinArrayMiB). A name carries it (BM_Stream/read/2/128), so runs on one
+/// machine compare.
 std::size_t array_mib() {
   const long l3 = sysconf(_SC_LEVEL3_CACHE_SIZE);
   const std::size_t want = l3 > 0 ? kCacheMultiple * std::size_t(l3) / (1024 * 1024) : 0;
-  return std::max<std::size_t>(1, (want + kMinArrayMiB - 1) / kMinArrayMiB) * kMinArrayMiB;
+  const std::size_t blocks = std::max<std::size_t>(1, (want + kMinArrayMiB - 1) / kMinArrayMiB);
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  const std::size_t memory_mib = pages > 0 && page > 0 ? std::size_t(pages) * std::size_t(page) / (1024 * 1024) : 0;
+  const std::size_t most = std::max<std::size_t>(1, memory_mib / (3 * kMemoryShare) / kMinArrayMiB);
+  return std::min(blocks, most) * kMinArrayMiB;
 }
-const std::size_t kElements = array_mib() * 1024 * 1024 / sizeof(double);
+const std::size_t kArrayMiB = array_mib();
+const std::size_t kElements = kArrayMiB * 1024 * 1024 / sizeof(double);
 
 /// The read kernel's sums: kAccumulators vectors of kLaneCount doubles (one AVX-512 register).
 typedef double Lanes __attribute__((vector_size(64)));
@@ -130,8 +140,8 @@ double run(Kernel k, Arrays& m, int threads) {
   for_chunks(threads, [&](int t, std::size_t begin, std::size_t end) {
     if (k == Kernel::Read) {
       // Wide independent sums: a scalar sum is a chain of dependent adds, bound by the add's
-      // latency (~8 GB/s here), not by memory; GCC does not vectorize the reduction without
-      // -ffast-math, so the lanes are spelled out.
+      // latency, not by memory; GCC does not vectorize the reduction without -ffast-math, so
+      // the lanes are spelled out.
       Lanes acc[kAccumulators] = {};
       std::size_t i = begin;
       for (; i + kStep <= end; i += kStep)
@@ -177,7 +187,7 @@ void register_stream_benchmarks() {
   for (const auto& [label, kernel] : kernels)
     for (int threads : {1, 2}) {
       const std::string name = std::string("BM_Stream/") + label + "/" + std::to_string(threads) + "/" +
-                               std::to_string(kElements * sizeof(double) / (1024 * 1024));
+                               std::to_string(kArrayMiB);
       benchmark::RegisterBenchmark(name.c_str(), BM_Stream, kernel, threads)
           ->Unit(benchmark::kMillisecond)
           ->UseManualTime();

@@ -65,7 +65,7 @@ INTEL_SERVER_CORES = {0x55: "skx", 0x6A: "icx", 0x6C: "icx", 0x8F: "spr", 0xCF: 
 
 # How the report names each generation tag.
 GENERATION_NAMES = {"zen1": "Zen 1", "zen2": "Zen 2", "zen3": "Zen 3", "zen4": "Zen 4", "zen5": "Zen 5",
-                    "skx": "Skylake-SP", "icx": "Ice Lake-SP", "spr": "Sapphire Rapids",
+                    "skx": "Skylake-SP/Cascade Lake", "icx": "Ice Lake-SP", "spr": "Sapphire Rapids",
                     "emr": "Emerald Rapids", "gnr": "Granite Rapids"}
 
 
@@ -120,8 +120,9 @@ def tag(info=None, cpu=None):
     info = lscpu() if info is None else info
     model = model_name(info)
     arch = microarchitecture(*(cpu_id() if cpu is None else cpu))
-    # A name with a model number ("AMD EPYC 9654") tells the machine apart already.
-    suffix = f"-{arch}" if arch and not re.search(r"\d", model) else ""
+    # A name with a model number ("AMD EPYC 9654") tells the machine apart already; a clock
+    # ("Intel(R) Xeon(R) CPU @ 2.20GHz") is no model number, and slug() drops it.
+    suffix = f"-{arch}" if arch and not re.search(r"\d", slug(model)) else ""
     return slug(model) + suffix + "_" + simd_level(cpu_flags(info))
 
 

@@ -3,7 +3,7 @@ behind one generic VM model name ("AMD EPYC") given one tag, so that a run on on
 other's results; AMD family 19h's Zen 3 and Zen 4 model ranges confused; a generation appended
 to a name that has a model number (the folder of a named CPU would change for nothing); an Intel
 model number read without its family 6, or a client core (model 151, Alder Lake) taken for a
-server one."""
+server one; a clock in the name ("@ 2.20GHz") taken for a model number."""
 import os
 import sys
 import unittest
@@ -34,6 +34,7 @@ class Tag(unittest.TestCase):
         self.assertEqual(tag(xeon, ("GenuineIntel", 6, 207)), "intel-xeon-emr_avx512")
         self.assertEqual(tag(xeon, ("GenuineIntel", 6, 143)), "intel-xeon-spr_avx512")
         self.assertEqual(tag(xeon, ("GenuineIntel", 6, 85)), "intel-xeon-skx_avx512")
+        self.assertEqual(tag("Intel(R) Xeon(R) CPU @ 2.20GHz", ("GenuineIntel", 6, 85)), "intel-xeon-skx_avx512")
         self.assertEqual(tag("Intel(R) Xeon(R) Gold 6430", ("GenuineIntel", 6, 143)), "intel-xeon-gold-6430_avx512")
 
     def test_unknown_generations_keep_the_plain_name(self):

@@ -336,6 +336,7 @@ std::vector<int> slot_distances(const fast::Topology& m) {
   return d;
 }
 
+/// The mean of slot_distances(m).
 double mean_slot_distance(const fast::Topology& m) {
   const std::vector<int> d = slot_distances(m);
   return std::accumulate(d.begin(), d.end(), 0.0) / double(d.size());
@@ -526,6 +527,7 @@ TEST(Layout, OneRelayoutKeepsTheStateAndBringsNeighboursTogether) {
   EXPECT_LT(worst, 1e-6);
 }
 
+/// The median of slot_distances(m).
 double median_slot_distance(const fast::Topology& m) {
   std::vector<int> d = slot_distances(m);
   std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
