@@ -52,8 +52,9 @@ tag=$("$py" "$root/scripts/machine_info.py" --tag)
 if ((quick)); then
   reps=${CRUMPLE_BENCH_REPS:-3}
   min_time=${CRUMPLE_BENCH_MIN_TIME:-0.2}
-  # Every benchmark at N <= 256 (per-pass ones too, once they exist).
-  filter='/(32|64|128|256)/'
+  # Every benchmark at N <= 256 (per-pass ones too), and the stream benchmarks, whose last
+  # number is their arrays' MiB (128 or more: it may match no size above).
+  filter='/(32|64|128|256)/|^BM_Stream/'
   dest=${out:-$root/results/$tag/quick}
 else
   reps=${CRUMPLE_BENCH_REPS:-10}
