@@ -122,8 +122,9 @@ def tag(info=None, cpu=None):
     arch = microarchitecture(*(cpu_id() if cpu is None else cpu))
     # A name with a model number ("AMD EPYC 9654") tells the machine apart already; a clock
     # ("Intel(R) Xeon(R) CPU @ 2.20GHz") is no model number, and slug() drops it.
-    suffix = f"-{arch}" if arch and not re.search(r"\d", slug(model)) else ""
-    return slug(model) + suffix + "_" + simd_level(cpu_flags(info))
+    name = slug(model)
+    suffix = f"-{arch}" if arch and not re.search(r"\d", name) else ""
+    return name + suffix + "_" + simd_level(cpu_flags(info))
 
 
 def compiler():
