@@ -402,9 +402,10 @@ def roofline_section(benches, charts):
     if not stream and not rows and not frozen:
         return []
     lines = ["## Roofline: the passes against the memory bandwidth", "",
-             "`BM_Stream/<kernel>/<threads>/<MiB>` streams arrays of doubles of <MiB> each (four times the L3 the "
-             "machine reports, rounded up to a multiple of 128 MiB; 128 MiB where none is reported) (read: sum; copy; "
-             "triad: a = b + q c; bytes as STREAM counts them, without the write-allocate read). Each fast pass's "
+             "`BM_Stream/<kernel>/<threads>/<MiB>` runs a kernel over arrays of doubles of <MiB> each, four times "
+             "the L3 the machine reports rounded up to a multiple of 128 MiB (128 MiB where none is reported): read "
+             "(a sum), copy, triad (a = b + q c), with bytes as STREAM counts them (no write-allocate read), and "
+             "gather (one double from each line, the lines in random order: whole lines counted). Each fast pass's "
              "bytes are counted from the layout (`bench/bytes_moved.cpp`: every array it reads or writes, element "
              "count times element size, data read through indices once per distinct element, adjacency rows at "
              "their full stride; topology_apply adds 64 bytes per line of the rows each event touches), so "

@@ -56,10 +56,13 @@ void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int 
 
 namespace {
 // Sums over adjacency lists. The first kFixed entries of a list are summed in a loop of fixed
-// length, entries past the list's count reading a zero record instead (adding an exact 0
-// changes no sum: a sum that starts at +0 never becomes -0): valences vary from 3 to 20, and
-// a loop that ends at the count mispredicts its exit once per list. Every list's block has room
-// for at least kFixed entries (kMinRoom, topology.h), so reading them needs no bounds test.
+// length, entries past the list's count selecting a zero record (adding an exact 0 changes no
+// sum: a sum that starts at +0 never becomes -0), the rest in a loop to the count. GCC unrolls
+// the fixed loop and, knowing the zero record's value, turns the selects into exits at the
+// count: one compare an entry, no loop counter, nothing loaded past the count. A form that
+// loads all kFixed entries without a branch measured slower (docs/PERFORMANCE.md). Every list's
+// block has room for at least kFixed entries (kMinRoom, topology.h), so reading them needs no
+// bounds test.
 constexpr int kFixed = 8;
 static_assert(kFixed <= kMinRoom);
 alignas(64) const EdgeOut kZeroRow{};
