@@ -10,12 +10,11 @@
 //              rows, eight edges in AVX lanes (lanes8.h). It stores per edge only what the
 //              gather cannot compute from the endpoints' rows (force and bending, 32 bytes);
 //              the gather sums those records as wide rows (wide.h), the first 8 entries of a
-//              list in a loop of fixed length (no exit mispredicted per list), and the
-//              implicit blocks W_e, kappa_e = kappa
-//              (m_a + m_b) (D15), from the neighbours' velocity rows. Springs are evaluated once
-//              per edge, not once from each side: a second set of square roots would cost more
-//              than the per-edge output does. What was measured and not kept for this pass is in
-//              docs/PERFORMANCE.md.
+//              list in a loop of fixed length (kernels.cpp says what GCC makes of it), and the
+//              implicit blocks W_e, kappa_e = kappa (m_a + m_b) (D15), from the neighbours'
+//              velocity rows. Springs are evaluated once per edge, not once from each side: a
+//              second set of square roots would cost more than the per-edge output does. What
+//              was measured and not kept for this pass is in docs/PERFORMANCE.md.
 //   integrate  K x jacobi_sweep (double-buffered guesses, each neighbour's mass in w, so a
 //              sweep reads one 16-byte value per neighbour and nothing per edge) ->
 //              momentum_drift (fixed-block reduction) -> advance (new v and x, sphere
