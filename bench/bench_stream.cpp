@@ -10,10 +10,10 @@
 // The gather is no streaming kernel: it is the rate at which the machine serves lines at random,
 // the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
 // Each array is four times the L3 that the machine reports, rounded up to a multiple of 128 MiB
-// (128 MiB on a 32 MiB Zen L3 or where none is reported, 1,152 MiB on a 260 MiB Xeon L3;
-// array_mib), so every pass comes from memory, not from a cache that holds a whole array;
-// allocated as the fast backend's state is (on huge pages where the kernel gives them: with
-// 4 KiB pages the gather's lines also miss the TLB). Threads as in the other benchmarks:
+// (128 MiB on a 32 MiB Zen L3 or where none is reported, 1,152 MiB on a 260 MiB Xeon L3; the
+// three arrays within a quarter of the memory: array_mib), so every pass comes from memory,
+// not from a cache that holds a whole array; allocated as the fast backend's state is (on huge
+// pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB). Threads as in the other benchmarks:
 // tbb::global_control caps the parallelism at T; the range is cut into T equal static chunks
 // (static_partitioner), the same chunks that first touched the pages, so each thread streams
 // the memory it faulted in.

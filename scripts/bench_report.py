@@ -403,7 +403,8 @@ def roofline_section(benches, charts):
         return []
     lines = ["## Roofline: the passes against the memory bandwidth", "",
              "`BM_Stream/<kernel>/<threads>/<MiB>` runs a kernel over arrays of doubles of <MiB> each, four times "
-             "the L3 the machine reports rounded up to a multiple of 128 MiB (128 MiB where none is reported): read "
+             "the L3 the machine reports rounded up to a multiple of 128 MiB (128 MiB where none is reported; the "
+             "three arrays within a quarter of the memory): read "
              "(a sum), copy, triad (a = b + q c), with bytes as STREAM counts them (no write-allocate read), and "
              "gather (one double from each line, the lines in random order: whole lines counted). Each fast pass's "
              "bytes are counted from the layout (`bench/bytes_moved.cpp`: every array it reads or writes, element "

@@ -59,8 +59,8 @@ namespace {
 // length, entries past the list's count selecting a zero record (adding an exact 0 changes no
 // sum: a sum that starts at +0 never becomes -0), the rest in a loop to the count. GCC unrolls
 // the fixed loop and, knowing the zero record's value, turns the selects into exits at the
-// count: one compare an entry, no loop counter, no record loaded past the count. A form that
-// loads all kFixed entries without a branch measured slower (docs/PERFORMANCE.md). Every list's
+// count: one compare an entry, no loop counter, no record loaded past the count, which costs
+// less than loading all kFixed entries without a branch (docs/PERFORMANCE.md). Every list's
 // block has room for at least kFixed entries (kMinRoom, topology.h), so reading them needs no
 // bounds test.
 constexpr int kFixed = 8;
