@@ -13,10 +13,10 @@
 // (128 MiB on a 32 MiB Zen L3 or where none is reported, 1,152 MiB on a 260 MiB Xeon L3; the
 // three arrays within a quarter of the memory: array_mib), so every pass comes from memory,
 // not from a cache that holds a whole array; allocated as the fast backend's state is (on huge
-// pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB). Threads as in the other benchmarks:
-// tbb::global_control caps the parallelism at T; the range is cut into T equal static chunks
-// (static_partitioner), the same chunks that first touched the pages, so each thread streams
-// the memory it faulted in.
+// pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB).
+// Threads as in the other benchmarks: tbb::global_control caps the parallelism at T; the range
+// is cut into T equal static chunks (static_partitioner), the same chunks that first touched
+// the pages, so each thread streams the memory it faulted in.
 // Reported: bytes_per_second (a kIsRate counter of the bytes above: GB/s in the report), and
 // the time per pass (manual time, steady_clock).
 #include <oneapi/tbb/global_control.h>
