@@ -7,7 +7,7 @@ namespace crumple::bench {
 int frames_per_iteration(int /*n*/) {
   // Eight frames per batch at every size: one iteration's time averages over the frame-to-frame
   // variation of the crumple (splits come in bursts) and includes the fast backend's relayout
-  // (docs/DECISIONS.md D12; three phases in consecutive frames) about as often as a continuing run
+  // (docs/DECISIONS.md D12; five phases in consecutive frames) about as often as a continuing run
   // does (once every 8-11 frames at the prepared point); few enough that the timed frames stay close to the prepared point
   // (8 of the 120 frames of the squeeze). Never adapted to the measured speed, so every backend,
   // thread count and revision times exactly the same frames.

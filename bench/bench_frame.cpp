@@ -42,7 +42,7 @@
 //   * BM_Frame and BM_Default also report `longest_ms`, the longest single frame of an
 //     iteration's batch (each frame timed by one clock read after it; the median over the
 //     repetition's iterations, which all simulate the same frames): the frame a real-time loop
-//     must fit. In the fast backend it is a frame that runs one of a relayout's three phases
+//     must fit. In the fast backend it is a frame that runs one of a relayout's five phases
 //     (layout.h), when the batch holds one (a relayout about once every 8-11 frames at the
 //     prepared point, bench_common.cpp).
 //   * The reported cpu_time is not meaningful (it includes the untimed clone and warm-up, on

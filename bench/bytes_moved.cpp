@@ -84,13 +84,15 @@ double topology_apply(const LayoutSizes& s, double events) {
   return adapt_test(s) + s.edges * 2 * kU8 + events * event(s);
 }
 
-// A relayout's three phases (layout.h) read every array of every element and write it permuted,
-// not the step's scratch, which the next step rewrites (no EdgeOut, no areas), and each renames
-// the other kinds' entries in place: the edge records in the vertex and triangle phases, the
-// faces in the vertex and edge phases, three of the four pools (not the neighbours) in the
-// triangle and edge phases. Split records are left out.
+// A relayout's phases (layout.h) read every array of every element and write it permuted (the
+// pools repacked), not the step's scratch, which the next step rewrites (no EdgeOut, no areas),
+// and rename the entries that name a moved kind in place: the edge records in the vertex and
+// triangle phases, the faces in the vertex and edge phases, the four pools (the neighbours in
+// the vertex phase, the triangles in the triangle phase, the springs and wings in the edge
+// phase). Split records and the edge order's read of the lists are left out.
 double layout(const LayoutSizes& s) {
-  const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + 2 * kI * (s.room_e + s.room_t) + kI * (s.room_e + 2 * s.room_t);
+  const double pools = 2 * kI * (s.room_e + s.room_t);  // a vertex's share of the four pools
+  const double vertex = 4 * kF4 + 2 * kI + 2 * kHead + pools /* repacked */ + pools /* renamed */;
   const double edge = 3 * kEdge + 2 * kI;
   const double triangle = 3 * kFace + kU8 + 2 * kI;
   return 2 * (s.vertices * vertex + s.edges * edge + s.triangles * triangle);

@@ -1,9 +1,10 @@
-// crumple_relayout_probe: what each phase of a relayout (layout.h: vertices, triangles, edges)
+// crumple_relayout_probe: what each phase of a relayout (layout.h: vertices, lists, triangles,
+// the edges' order, edges)
 // costs on a state that has grown since its last one. From the benchmarks' prepared state
 // (bench_frame.cpp: the paper's configuration at 0.6 x sphere_time) it runs GROWTH more frames
 // with relayouts off, so that the vertices created since the last relayout are many (the
 // prepared state holds about a fifth); then each round relays out a copy of that topology,
-// timing the three phases one after the other, with the relayout's scratch faulted in first
+// timing the five phases one after the other, with the relayout's scratch faulted in first
 // (LayoutScratch::warm, as the steps between relayouts do): the phases' own work, without the
 // first touches that the simulator moves out of them. The summary gives each phase's median
 // over the rounds.
@@ -63,7 +64,7 @@ int main(int argc, char** argv) {
   const crumple::fast::Topology& m = sim.topology();
   std::printf("N = %d, %d thread(s), frame %d: %d vertex, %d edge, %d triangle slots, %lld vertices created since the last relayout\n",
               n, threads, prep_frames + growth, m.V.size(), m.E.size(), m.T.size(), static_cast<long long>(m.V.created));
-  std::printf("round   vertices  triangles      edges   (ms)\n");
+  std::printf("round   vertices      lists  triangles edge_order      edges   (ms)\n");
   const crumple::fast::Parallel par(threads);
   std::vector<std::vector<double>> by_phase(kLayoutPhases);
   for (int r = 0; r < rounds; ++r) {

@@ -32,8 +32,8 @@
 //   layout     when enough elements were created since the last time, relayout() (layout.h)
 //              reorders every slot along a space-filling curve of the rest positions, keeping
 //              logical ids, so that neighbours stay in nearby cache lines (D12): the vertices
-//              in that step, the triangles and the edges in the next two, so that no step
-//              carries it whole.
+//              in that step, then their lists, the triangles, the edges' order and the edges
+//              in the next four, so that no step carries it whole.
 //   data       the mesh (topology.h: hot vertex state, cold topology, adjacency) outlives the
 //              step; what the forces and integrate passes hand on to each other (rows, edge
 //              records, forces, guesses) is per-step scratch (step_scratch.h), which edits and

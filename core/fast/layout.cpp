@@ -213,19 +213,38 @@ void rename_records(Array<SplitRecord>& records, const Parallel& par, F rename) 
   });
 }
 
+/// One pool's entries of every vertex's list renamed where they are, a vertex's block at a time
+/// (only the blocks in use are read: the garbage a move left behind holds nothing to rename).
+template <class F>
+void rename_pool(const Parallel& par, const Array<ListHead>& heads, Array<std::int32_t>& pool, F rename) {
+  std::int32_t* __restrict entry = pool.data();
+  par.run(int(heads.size()), kGrain, [&](int b, int e) {
+    for (int k = b; k < e; ++k) {
+      const ListHead h = heads[k];
+      for (int w = h.at; w < h.at + h.count; ++w) entry[w] = rename(entry[w]);
+    }
+  });
+}
+
 // Phase one. The vertices' state that lives across steps (forces, sums and guesses are
-// rewritten by the next step before anything reads them) is permuted, and the adjacency pools
-// are repacked in the new vertex order with the neighbours renamed; the other entries (edge and
-// triangle slots) keep their values until phases two and three. A group's arrays have distinct
-// spares.
+// rewritten by the next step before anything reads them) is permuted with the list heads, which
+// still point into the pools where the lists are, and the neighbours are renamed there; the
+// other entries (edge and triangle slots) keep their values until their phases. A group's
+// arrays have distinct spares.
 void move_vertices(Vertices& V, const Parallel& par, LayoutScratch& s, const Rename& v) {
   const Array<int>& vorder = s.vorder;
   permute(par, vorder, gathered(V.xm, s.spare_rows), gathered(V.spring_list, s.spare_heads), gathered(V.lid, s.spare_vid));
   permute(par, vorder, gathered(V.vm, s.spare_rows), gathered(V.tri_list, s.spare_heads));
   permute(par, vorder, gathered(V.nr, s.spare_rows));
   permute(par, vorder, gathered(V.rest, s.spare_rows));
+  rename_pool(par, V.spring_list, V.nbrs, v);
+}
+
+// Phase two: the adjacency pools repacked in vertex slot order, so that neighbouring vertices'
+// lists share cache lines and no garbage is left (no entry changes).
+void pack_lists(Vertices& V, const Parallel& par, LayoutScratch& s) {
   const auto same = [](std::int32_t x) { return x; };
-  repack(par, s, {V.springs, s.spare_springs}, {V.nbrs, s.spare_nbrs}, V.spring_list, same, v);
+  repack(par, s, {V.springs, s.spare_springs}, {V.nbrs, s.spare_nbrs}, V.spring_list, same, same);
   repack(par, s, {V.tris, s.spare_tris}, {V.wings, s.spare_wings}, V.tri_list, same, same);
   V.garbage_e = V.garbage_t = 0;
 }
@@ -254,21 +273,7 @@ void rename_vertices(Topology& m, const Parallel& par, const Rename& v) {
   });
 }
 
-/// One pool's entries of every vertex's list renamed where they are, a vertex's block at a time
-/// (phase one packed the blocks in vertex order; only the blocks in use are read: the garbage
-/// a later move left behind holds nothing to rename).
-template <class F>
-void rename_pool(const Parallel& par, const Array<ListHead>& heads, Array<std::int32_t>& pool, F rename) {
-  std::int32_t* __restrict entry = pool.data();
-  par.run(int(heads.size()), kGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      const ListHead h = heads[k];
-      for (int w = h.at; w < h.at + h.count; ++w) entry[w] = rename(entry[w]);
-    }
-  });
-}
-
-// Phase two: the triangles permuted (the areas are not moved: they are per-step values that
+// Phase three: the triangles permuted (the areas are not moved: they are per-step values that
 // compute_normals writes for every slot before anything reads them), then their slots renamed
 // where they are: in the edges' sides, the vertices' triangle lists and the split records.
 void move_triangles(Topology& m, const Parallel& par, LayoutScratch& s, const Rename& t) {
@@ -284,7 +289,7 @@ void move_triangles(Topology& m, const Parallel& par, LayoutScratch& s, const Re
   });
 }
 
-// Phase three: the edges permuted (the edge pass's output is per step and is not kept), then
+// Phase five: the edges permuted (the edge pass's output is per step and is not kept), then
 // their slots renamed where they are: in the triangles' sides, the vertices' spring and wing
 // lists and the split records.
 void move_edges(Topology& m, const Parallel& par, LayoutScratch& s, const Rename& e) {
@@ -318,8 +323,18 @@ void relayout_triangles(Topology& m, const Parallel& par, LayoutScratch& s) {
   inverse(par, m.T.lid, m.T.phys);
 }
 
+// Phase four: the edge order, from the lists that phase two packed. Phase five applies it a
+// step later, to the edges as they are then: the slots that step added go last in the order they
+// have, and a slot it freed or reused keeps its place in the order (dead slots are harmless
+// anywhere, layout.h).
+void order_edges(Topology& m, const Parallel& par, LayoutScratch& s) { layout_order::edge_order(m, par, s); }
+
 void relayout_edges(Topology& m, const Parallel& par, LayoutScratch& s) {
-  layout_order::edge_order(m, par, s);
+  const int ordered = int(s.eorder.size()), ne = m.E.size();
+  if (ordered > ne) throw std::logic_error("relayout: the edge order has more slots than the edges");
+  resize_scratch(s.eorder, std::size_t(ne));
+  for (int e = ordered; e < ne; ++e) s.eorder[std::size_t(e)] = e;
+  inverse(par, s.eorder, s.enew);
   move_edges(m, par, s, Rename{s.enew});
   inverse(par, m.E.lid, m.E.phys);
 }
@@ -332,7 +347,9 @@ void relayout(Topology& m, const Parallel& par, LayoutScratch& s) {
 void relayout_phase(int phase, Topology& m, const Parallel& par, LayoutScratch& s) {
   switch (phase) {
     case 0: relayout_vertices(m, par, s); break;
-    case 1: relayout_triangles(m, par, s); break;
+    case 1: pack_lists(m.V, par, s); break;
+    case 2: relayout_triangles(m, par, s); break;
+    case 3: order_edges(m, par, s); break;
     default: relayout_edges(m, par, s); break;
   }
 }

@@ -18,13 +18,15 @@
 // over the state, so it runs only when enough elements were created since the last one
 // (FastSimulator's layout fraction).
 //
-// It runs in three phases, each a complete permutation of one kind of element that renames
-// every reference to it and leaves a valid topology, so that a simulator can run them in
+// It runs in five phases, each leaving a valid topology, so that a simulator can run them in
 // consecutive steps and no step carries the whole cost: a real-time loop must fit its longest
-// frame. Phase one moves the vertices and repacks the adjacency pools in their new order; phase
-// two sorts the triangles and phase three the edges by the vertex slots they find (new elements
-// created in between included). Until their phase the triangles and edges keep their old order,
-// which costs the passes of a step or two some locality, not correctness.
+// frame. Phase one moves the vertices (their lists stay where they are, renamed); phase two
+// repacks the adjacency pools in the new vertex order; phase three sorts the triangles by the
+// vertex slots they find; phase four orders the edges by their lower endpoints, and phase five
+// moves them so, with the edges created in between last. Each move is a complete permutation of
+// one kind of element that renames every reference to it. Until their phase the lists, triangles
+// and edges keep their old order, which costs the passes of a step or a few some locality, not
+// correctness (every pass computes a dead slot as a live one, so a dead slot may sit anywhere).
 #pragma once
 
 #include "fast/parallel.h"
@@ -72,8 +74,8 @@ struct LayoutScratch {
   Array<std::uint8_t> spare_alive;  ///< the triangles' alive bytes
 };
 
-/// The phases of a relayout (above): vertices, triangles, edges.
-inline constexpr int kLayoutPhases = 3;
+/// The phases of a relayout (above): vertices, lists, triangles, edge order, edges.
+inline constexpr int kLayoutPhases = 5;
 
 /// A step between relayouts faults in this part (1 / kWarmParts) of the memory the next
 /// relayout will write that is not faulted in yet (LayoutScratch::warm; FastSimulator).

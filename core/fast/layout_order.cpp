@@ -187,7 +187,6 @@ void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {
   });
   int at = live;
   for (int id : m.E.free_ids) s.eorder[at++] = m.E.phys[std::size_t(id)];
-  inverse(par, s.eorder, s.enew);
 }
 
 }  // namespace crumple::fast::layout_order

@@ -43,11 +43,12 @@ int block_starts(const Parallel& par, int n, Array<int>& start, Count count) {
 /// Phase one's order: the vertex slots along a Morton curve of their rest positions (over the
 /// axes along which the live ones span a cell), dead slots last, into s.vorder.
 void vertex_order(const Parallel& par, const Vertices& V, LayoutScratch& s);
-/// Phase two's order and its inverse (s.torder, s.tnew[old] = new): triangles by their lowest
+/// Phase three's order and its inverse (s.torder, s.tnew[old] = new): triangles by their lowest
 /// corner's slot, dead ones last.
 void triangle_order(const Topology& m, const Parallel& par, LayoutScratch& s);
-/// Phase three's order and its inverse (s.eorder, s.enew[old] = new): edges by their lower
-/// endpoint's slot, in each vertex's spring list order, dead ones last in free-list order.
+/// Phase four's order (s.eorder; phase five extends it to the slots added since and inverts
+/// it): edges by their lower endpoint's slot, in each vertex's spring list order, dead ones
+/// last in free-list order.
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s);
 
 }  // namespace crumple::fast::layout_order
