@@ -5,8 +5,8 @@
 // of one round take the fractions in a rotated order, so that every fraction meets the machine's
 // load at every position. Per run: the mean frame, each pass's share of it (the passes'
 // own timers; the layout pass's includes the steps between relayouts that fault in the next
-// one's memory, LayoutScratch::warm), the frames that ran a relayout phase (a relayout's three
-// phases run in consecutive steps, layout.h: three frames of the paper's one step a frame) and
+// one's memory, LayoutScratch::warm), the frames that ran a relayout phase (a relayout's five
+// phases run in consecutive steps, layout.h: five frames of the paper's one step a frame) and
 // the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the
 // page faults (first touches of memory, which cost some microseconds each on a VM:
 // docs/PERFORMANCE.md) a frame and in the frames that relayout.

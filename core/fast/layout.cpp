@@ -323,7 +323,7 @@ void relayout_triangles(Topology& m, const Parallel& par, LayoutScratch& s) {
   inverse(par, m.T.lid, m.T.phys);
 }
 
-// Phase four: the edge order, from the lists that phase two packed. Phase five applies it a
+// Phase four: the edge order, from the lists as phase two packed them. Phase five applies it a
 // step later, to the edges as they are then: the slots that step added go last in the order they
 // have, and a slot it freed or reused keeps its place in the order (dead slots are harmless
 // anywhere, layout.h).

@@ -153,8 +153,9 @@ int owned_springs(const Vertices& V, int v) {
 
 }  // namespace
 
-// Read from the spring lists that phase one packed in vertex order (two streaming passes over
-// them, a fixed block of vertices at a time) rather than sorted by a key over every edge record:
+// Read from the spring lists that phase two packed in vertex order (the events of a step since
+// may have moved a few blocks: locality, not correctness; two streaming passes over them, a
+// fixed block of vertices at a time) rather than sorted by a key over every edge record:
 // the passes gather an edge's endpoints, not its neighbours in slot order, so any order within
 // one lower endpoint serves locality, and none changes a bit of what a step computes.
 void edge_order(const Topology& m, const Parallel& par, LayoutScratch& s) {

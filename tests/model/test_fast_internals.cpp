@@ -556,7 +556,7 @@ TEST(Layout, VertexOrderIsACurveOverTheSheetWithTheDeadLast) {
 }
 
 // True when the live triangles are sorted by their lowest corner's slot and the dead ones
-// follow them (what the relayout's second phase leaves).
+// follow them (what the relayout's third phase leaves).
 bool triangles_in_vertex_order(const fast::Topology& m) {
   int last = -1;
   for (int t = 0; t < m.T.size(); ++t) {
@@ -666,6 +666,34 @@ TEST(Layout, EdgesCreatedBetweenTheirOrderAndTheirMoveGoLast) {
   EXPECT_GT(m.E.size(), before);
   EXPECT_LE(edge_order_descents(m), 2 * 3 * (ev.splits + ev.restores));
   EXPECT_GT(m.E.size(), 20 * 2 * 3 * (ev.splits + ev.restores));  // so that the bound says something
+}
+
+// A clone taken between the edges' order and their move (phases four and five) carries the
+// order with it: it steps on to the original's slots and state bit for bit. Catches a copy of
+// the relayout's scratch that keeps the room but not the order (the clone's move would throw or
+// put the edges elsewhere) and a clone that restarts the relayout.
+TEST(Layout, ACloneBetweenTheEdgesOrderAndTheirMoveStepsAsTheOriginal) {
+  Params p;
+  fast::FastSimulator sim(make_grid(24), p, 2);
+  grow_without_relayouts(sim, 60);
+  sim.set_layout_fraction(0);
+  for (int phase = 0; phase < 4; ++phase) sim.step();
+  sim.set_layout_fraction(-1);
+  fast::FastSimulator copy(sim);
+  for (fast::FastSimulator* s : {&sim, &copy}) {
+    s->step();
+    s->step();
+    ASSERT_EQ(s->relayout_phases(), 5u);
+    ASSERT_EQ(s->check_topology(), "");
+  }
+  const fast::Topology &a = sim.topology(), &b = copy.topology();
+  ASSERT_EQ(a.E.size(), b.E.size());
+  for (int e = 0; e < a.E.size(); ++e) ASSERT_EQ(a.E.lid[e], b.E.lid[e]) << e;
+  ASSERT_EQ(a.V.size(), b.V.size());
+  for (int v = 0; v < a.V.size(); ++v) {
+    ASSERT_EQ(a.V.lid[v], b.V.lid[v]) << v;
+    ASSERT_EQ(std::memcmp(&a.V.xm[v], &b.V.xm[v], sizeof(fast::Float4)), 0) << v;
+  }
 }
 
 // After LayoutScratch::warm a relayout writes only memory that warm faulted in: no spare or
