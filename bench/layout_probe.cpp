@@ -9,7 +9,9 @@
 // phases run in consecutive steps, layout.h: five frames of the paper's one step a frame) and
 // the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the
 // page faults (first touches of memory, which cost some microseconds each on a VM:
-// docs/PERFORMANCE.md) a frame and in the frames that relayout.
+// docs/PERFORMANCE.md) a frame and in the frames that relayout, and `warm`: the layout pass's
+// time in the frames that ran no relayout phase (the first touches of the next relayout's
+// memory), ms a frame over all the timed frames.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
 #include <sys/resource.h>
@@ -42,6 +44,7 @@ struct RunResult {
   double longest_frame_ms = 0;
   double faults = 0;           ///< minor page faults a frame (mean)
   double relayout_faults = 0;  ///< minor page faults a frame that relayouts (mean; 0 if none)
+  double warm_ms = 0;          ///< the layout pass in frames without a relayout phase (warm's), ms a frame
 };
 
 /// The process's minor page faults so far.
@@ -74,10 +77,13 @@ RunResult run(const FastSimulator& prepared, const crumple::Params& params, int 
     if (sim.relayout_phases() > phases_before) {  // other frames' layout time is warm's (layout.h)
       ++r.layout_frames, r.relayout_faults += faults;
       r.longest_layout_ms = std::max(r.longest_layout_ms, 1e3 * layout);
+    } else {
+      r.warm_ms += 1e3 * layout;
     }
   }
   r.frame_ms = 1e3 * seconds / frames;
   r.faults /= frames;
+  r.warm_ms /= frames;
   if (r.layout_frames > 0) r.relayout_faults /= r.layout_frames;
   for (int k = 0; k < int(Pass::kCount); ++k) r.pass_ms[k] = 1e3 * (sim.pass_seconds()[k] - before[k]) / frames;
   return r;
@@ -90,7 +96,7 @@ void print_medians(const std::map<double, std::vector<RunResult>>& results, int 
               rounds);
   std::printf("%-9s %8s %8s %13s %8s", "fraction", "frame", "longest", "layout_frames", "phase");
   for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14s", to_string(Pass(p)));
-  std::printf(" %8s %15s\n", "faults", "relayout_faults");
+  std::printf(" %8s %15s %8s\n", "faults", "relayout_faults", "warm");
   for (const auto& [fraction, runs] : results) {
     auto med = [&](auto get) {
       std::vector<double> v;
@@ -102,8 +108,8 @@ void print_medians(const std::map<double, std::vector<RunResult>>& results, int 
                 med([](const RunResult& r) { return double(r.layout_frames); }),
                 med([](const RunResult& r) { return r.longest_layout_ms; }));
     for (int p = 0; p < int(Pass::kCount); ++p) std::printf(" %14.2f", med([&](const RunResult& r) { return r.pass_ms[p]; }));
-    std::printf(" %8.0f %15.0f\n", med([](const RunResult& r) { return r.faults; }),
-                med([](const RunResult& r) { return r.relayout_faults; }));
+    std::printf(" %8.0f %15.0f %8.2f\n", med([](const RunResult& r) { return r.faults; }),
+                med([](const RunResult& r) { return r.relayout_faults; }), med([](const RunResult& r) { return r.warm_ms; }));
   }
 }
 

@@ -37,7 +37,7 @@ FROZEN_FRESH = re.compile(r"^BM_FrozenFresh/(?P<backend>[^/]+)/(?P<threads>\d+)/
 STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
-FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
+FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 CORE_TO_CORE = re.compile(r"^BM_CoreToCore/(?P<threads>\d+)/(?P<bytes>\d+)(?:/[a-z_]+)?$")
 DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PAIR = re.compile(r"^BM_Pair/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
@@ -282,6 +282,11 @@ def stream_bandwidth(benches):
     return out
 
 
+# BM_FirstTouch's kinds of page, in the report's order, and how the report names each.
+FIRST_TOUCH_PAGES = [("small", "4 KiB pages"), ("huge", "huge pages"),
+                     ("idle", "huge pages of memory left free for 3 s first")]
+
+
 def first_touch(benches):
     """{pages: median us a 4 KiB of first touch} from BM_FirstTouch's us_per_4kib."""
     out = {}
@@ -319,13 +324,14 @@ def first_touch_lines(benches, stream):
     touch = first_touch(benches)
     if not touch:
         return []
-    costs = ", ".join(f"{us:.2f} us a 4 KiB on {'4 KiB' if pages == 'small' else pages} pages"
-                      for pages, us in sorted(touch.items(), key=lambda kv: kv[0] != "small"))
+    costs = ", ".join(f"{touch[pages]:.2f} us a 4 KiB on {label}" for pages, label in FIRST_TOUCH_PAGES if pages in touch)
     copy = 4096 / (roof(stream, 1) * 1e9) * 1e6  # nan without BM_Stream on 1 thread
     against = f" (the best STREAM kernel moves 4 KiB in {copy:.2f} us on 1 thread)" if math.isfinite(copy) else ""
     return [f"First touch of fresh memory (`BM_FirstTouch`, 1 thread, a write a 4 KiB page; the kernel maps "
             f"and zeroes each page): {costs}{against}. Growth into memory not used before pays this once a "
-            "page, which is why the fast backend faults its reserved room in ahead (docs/DECISIONS.md D16).", ""]
+            "page, which is why the fast backend faults its reserved room in ahead (docs/DECISIONS.md D16). "
+            "Memory that has sat free a while may cost more: a virtual machine's kernel may report free memory "
+            "to its host, which discards it, and the next touch faults on the host a 4 KiB at a time.", ""]
 
 
 # BM_Stream's kernel that reads whole lines at random: the rate of scattered misses, no STREAM kernel.

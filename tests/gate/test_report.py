@@ -239,15 +239,19 @@ class FrozenFresh(unittest.TestCase):
 class FirstTouch(unittest.TestCase):
     """BM_FirstTouch's cost a 4 KiB per kind of page, set against the 1-thread STREAM roof.
     Wrong code this catches: the iteration time read instead of the us_per_4kib counter, the
-    kinds of page swapped or mislabelled, the 2-thread roof (0.22 us) instead of 1 thread's."""
+    kinds of page swapped or mislabelled (idle among them, whose name has an iterations part),
+    the 2-thread roof (0.22 us) instead of 1 thread's."""
 
     def test_cost_per_page_kind_against_streaming(self):
         b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}  # roof 14 GB/s on 1 thread
-        for pages, us in [("huge", 5.0), ("small", 12.0)]:
+        for pages, us in [("idle", 11.0), ("huge", 5.0), ("small", 12.0)]:
             name = f"BM_FirstTouch/{pages}/64/manual_time"
+            if pages == "idle":
+                name = "BM_FirstTouch/idle/64/iterations:2/manual_time"
             b[name] = bench(name, 99.0, us_per_4kib=us)
         text = " ".join(bench_report.roofline_section(b, {}))
-        self.assertIn("12.00 us a 4 KiB on 4 KiB pages, 5.00 us a 4 KiB on huge pages", text)
+        self.assertIn("12.00 us a 4 KiB on 4 KiB pages, 5.00 us a 4 KiB on huge pages, 11.00 us a 4 KiB on huge "
+                      "pages of memory left free for 3 s first", text)
         self.assertIn("moves 4 KiB in 0.29 us on 1 thread", text)  # 4096 B at 14 GB/s
 
     def test_no_first_touch_run_no_sentence(self):
