@@ -1,10 +1,11 @@
 // BM_FirstTouch/<pages>/<MiB>: what the machine charges for the first touch of memory (a page
 // fault: the kernel maps and zeroes a page), per 4 KiB, on 4 KiB pages ("small") and on
 // transparent huge pages ("huge", advised as the fast backend advises its large arrays,
-// fast/aligned.h), and on huge pages after the memory has sat free for kIdleSeconds ("idle"). A simulation that grows (refinement's new elements, a relayout's scratch)
-// pays this for every page it uses for the first time; on a virtual machine it can cost as much
-// as streaming a few hundred KiB (docs/PERFORMANCE.md), which is why the fast backend reserves
-// and faults in its room ahead (docs/DECISIONS.md D16).
+// fast/aligned.h), and on huge pages after the memory has sat free for kIdleSeconds ("idle").
+// A simulation that grows (refinement's new elements, a relayout's scratch) pays this for every
+// page it uses for the first time; on a virtual machine it can cost as much as streaming a few
+// hundred KiB (docs/PERFORMANCE.md), which is why the fast backend reserves and faults in its
+// room ahead (docs/DECISIONS.md D16).
 // Each iteration maps kTouchMiB of fresh memory with mmap (not through an allocator, which may
 // hand back memory it kept from the previous iteration, already faulted in), writes one byte a
 // 4 KiB page (the timed part), and unmaps it; one thread. The kernel hands an unmapped page
