@@ -643,6 +643,15 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
   EXPECT_EQ(sim.relayout_phases(), 5u);
 }
 
+// Grows sim without relayouts, then runs a relayout's first four phases (through the edges'
+// order) with relayouts off after them: the next step moves the edges, and no other starts.
+void stop_before_the_edges_move(fast::FastSimulator& sim) {
+  grow_without_relayouts(sim, 60);
+  sim.set_layout_fraction(0);
+  for (int phase = 0; phase < 4; ++phase) sim.step();
+  sim.set_layout_fraction(-1);
+}
+
 // The edges' order is taken a step before the edges move (phases four and five), so the events
 // of the step between create and free edges that the order does not know: the move must still
 // be a valid permutation of every slot (the new slots last), and every other edge must follow
@@ -652,11 +661,8 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
 TEST(Layout, EdgesCreatedBetweenTheirOrderAndTheirMoveGoLast) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 2);
-  grow_without_relayouts(sim, 60);
+  stop_before_the_edges_move(sim);
   const fast::Topology& m = sim.topology();
-  sim.set_layout_fraction(0);
-  for (int phase = 0; phase < 4; ++phase) sim.step();
-  sim.set_layout_fraction(-1);
   ASSERT_EQ(sim.relayout_phases(), 4u);
   const int before = m.E.size();
   const StepEvents ev = sim.step();
@@ -675,10 +681,7 @@ TEST(Layout, EdgesCreatedBetweenTheirOrderAndTheirMoveGoLast) {
 TEST(Layout, ACloneBetweenTheEdgesOrderAndTheirMoveStepsAsTheOriginal) {
   Params p;
   fast::FastSimulator sim(make_grid(24), p, 2);
-  grow_without_relayouts(sim, 60);
-  sim.set_layout_fraction(0);
-  for (int phase = 0; phase < 4; ++phase) sim.step();
-  sim.set_layout_fraction(-1);
+  stop_before_the_edges_move(sim);
   fast::FastSimulator copy(sim);
   for (fast::FastSimulator* s : {&sim, &copy}) {
     s->step();
