@@ -88,6 +88,8 @@ void add_step_options(CLI::App* run, app::RunOptions& o) {
   run->add_option("--cg-tolerance", p.cg_tolerance, "implicit: CG relative tolerance")->capture_default_str();
   run->add_option("--backend", o.backend, "backend")->check(CLI::IsMember(backend_names()))->capture_default_str();
   run->add_option("--threads", o.threads, "worker threads")->capture_default_str();
+  run->add_flag("--resident", o.resident,
+                "fault in the memory reserved for the sheet's growth at load: no page fault in a frame until outgrown");
 }
 
 // The model's coefficients and switches (MODEL.md), the seed and the scene's sphere.

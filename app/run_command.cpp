@@ -145,6 +145,7 @@ std::optional<Sheet> make_sheet(const RunOptions& o, const InputMesh& mesh, std:
   desc.params = o.params;
   desc.backend = o.backend;
   desc.threads = o.threads;
+  desc.resident = o.resident;
   try {
     return SheetAccess::create(mesh, desc);
   } catch (const Error& e) {

@@ -15,6 +15,7 @@ struct RunOptions {
   int frames = 180;               ///< frames of params.frame_dt
   std::string backend = "fast";
   int threads = 1;                ///< worker threads for parallel backends
+  bool resident = false;          ///< SheetDesc::resident
   std::string out;                ///< output folder (empty: none)
   bool force = false;             ///< --out may be a non-empty folder: replace crumple's files in it
   int every = 0;                  ///< also write every K-th frame as an OBJ (0: never)

@@ -86,6 +86,7 @@ Sheet SheetAccess::create(const InputMesh& mesh, const SheetDesc& desc) {
   std::unique_ptr<Simulator> sim;
   try {
     sim = make_simulator(desc.backend, mesh, desc.params, desc.threads);
+    if (desc.resident) sim->make_resident();
   } catch (const std::bad_alloc&) {
     throw;
   } catch (const std::exception& e) {  // what a backend refuses (the fast one's integrators)

@@ -88,6 +88,8 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     warmed_ = to;
     return (to - from) * sizeof(T);
   }
+  /// Faults in all of the room (a resident array: growth within it never faults).
+  void make_resident() { warm_to(this->capacity(), SIZE_MAX); }
   /// The bytes warm_to(target) would touch with no budget.
   std::size_t cold_bytes(std::size_t target) const {
     const std::size_t to = std::min(target, this->capacity()), from = touched();

@@ -229,6 +229,21 @@ void FastSimulator::warm_layout() {
   layout_scratch_.warm(topo_, par_.threads(), std::max(kHugePage, cold / kWarmParts));
 }
 
+// Every Array's whole room: the topology's and the step's (reserved for 4x the input in the
+// constructor), the topology pass's and the relayout's scratch. Array::keep_warm then never
+// touches memory (it finds the room touched), and a copy touches what its original has.
+void FastSimulator::make_resident() {
+  auto whole = [](auto& a) { a.make_resident(); };
+  topo_.for_each_array(whole);
+  step_.for_each_array(whole);
+  decisions_.make_resident();
+  vertex_stamp_.make_resident();
+  stamps_.make_resident();
+  rounds_.make_resident();
+  waves_.make_resident();
+  if (layout_phase_ == 0) layout_scratch_.make_resident(topo_, par_.threads());  // not within a relayout
+}
+
 std::vector<std::string> FastSimulator::pass_names() const {
   std::vector<std::string> names;
   for (int k = 0; k < int(Pass::kCount); ++k) names.push_back(to_string(Pass(k)));

@@ -93,6 +93,7 @@ class FastSimulator final : public Simulator {
   void set_masses(const std::vector<double>& m) override;
   void set_manipulators(const Manipulators& m) override;
   void render(RenderBuffers& out, bool triangles) override;
+  void make_resident() override;
 
   /// Runs one pass of a step on the current state (benchmarks time passes one by one).
   void run_pass(Pass p);

@@ -192,6 +192,13 @@ std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {
   return cold;
 }
 
+void LayoutScratch::make_resident(const Topology& m, int threads) {
+  for_each_room(*this, m, threads, [&](auto& a, std::size_t, std::size_t capacity) {
+    if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts
+    a.make_resident();
+  });
+}
+
 bool layout_stale(const Topology& m, double fraction) {
   if (fraction < 0) return false;
   return double(m.V.created) >= fraction * m.V.size();

@@ -62,6 +62,9 @@ struct LayoutScratch {
   std::size_t warm(const Topology& m, int threads, std::size_t budget);
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
+  /// Faults in all of the room: each spare at its array's capacity, each order's scratch at
+  /// what reserve() gave it (FastSimulator::make_resident). Only between relayouts.
+  void make_resident(const Topology& m, int threads);
 
   Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
   Array<std::uint64_t> code, code2;

@@ -29,6 +29,7 @@ class RestoreWaves {
  public:
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
+  void make_resident() { claim_.make_resident(); }  ///< see Simulator::make_resident
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
   /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
   /// restores applied.

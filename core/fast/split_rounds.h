@@ -24,6 +24,7 @@ class SplitRounds {
  public:
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
+  void make_resident() { tally_.make_resident(); }  ///< see Simulator::make_resident
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
   /// each accepted split changes in `stamps`. Returns the splits applied.
   int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);

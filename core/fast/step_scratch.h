@@ -59,6 +59,11 @@ struct StepScratch {
     }
     if (edge_out.size() != ne) edge_out.resize(ne), edge_out.keep_warm();
   }
+  /// Calls f(array) for each array (see Topology::for_each_array).
+  template <class F>
+  void for_each_array(F&& f) {
+    f(edge_out), f(forces.fx), f(forces.fy), f(forces.fz), f(forces.ksum), f(g), f(g_next), f(wsum);
+  }
   /// fit, and wsum sized to the vertex slots (the axial Jacobian's step).
   void fit_blocks(const Topology& m) {
     fit(m);

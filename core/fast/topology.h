@@ -235,6 +235,13 @@ class Topology {
   void relist_tri(int v, int entry, int to, int wing_edge);
   void unlist_tri(int v, int entry);  ///< erases `entry` from v's triangle list, keeping the order
 
+  /// Calls f(array) for each of the arrays that grow with the mesh: every kind of slot's
+  /// attributes, the pools and the split records (FastSimulator::make_resident).
+  template <class F>
+  void for_each_array(F&& f) { each_array(*this, f); }
+  template <class F>
+  void for_each_array(F&& f) const { each_array(*this, f); }
+
   int live_vertices() const;
   int live_mesh_edges() const;
   int live_auxiliary() const;
@@ -248,6 +255,14 @@ class Topology {
   const std::int32_t* wings_of(int v) const { return &V.wings[std::size_t(V.tri_list[v].at)]; }
 
  private:
+  template <class Self, class F>
+  static void each_array(Self& m, F& f) {
+    f(m.V.xm), f(m.V.vm), f(m.V.nr), f(m.V.rest), f(m.V.spring_list), f(m.V.tri_list), f(m.V.lid), f(m.V.phys);
+    f(m.V.springs), f(m.V.nbrs), f(m.V.tris), f(m.V.wings);
+    f(m.E.slots), f(m.E.lid), f(m.E.phys);
+    f(m.T.slots), f(m.T.alive), f(m.T.area), f(m.T.lid), f(m.T.phys);
+    f(m.records);
+  }
   void list_spring(int v, int entry, int other);
   void unlist_spring(int v, int entry);
   void move_block(int v, bool springs, int need);  ///< v's list to a new block of room >= need

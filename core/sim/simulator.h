@@ -155,6 +155,11 @@ class Simulator {
   /// `triangles` (a renderer needs them only when the topology changed). Not const: a backend
   /// may bring cached normals up to date (the same values its next step would compute).
   virtual void render(RenderBuffers& out, bool triangles) = 0;
+  /// Faults in all the memory reserved for the mesh's growth, so that no step page-faults until
+  /// the mesh outgrows its reserve (a real-time loop's choice: more resident memory and a longer
+  /// load for no first touch inside a frame, docs/DECISIONS.md D16). A copy of a resident
+  /// simulator is resident. A backend that reserves nothing ahead does nothing.
+  virtual void make_resident() {}
 
   // --- passes, for per-pass benchmarks ---
   /// The passes of a step that run_pass() can run alone, in step order.

@@ -134,6 +134,27 @@ TEST_P(Api, CallersMeshKeepsItsIds) {
   for (int k = 0; k < 4; ++k) EXPECT_FLOAT_EQ(s.normals()[3 * k + 2], 1.0f) << k;
 }
 
+// A resident sheet (SheetDesc::resident: its reserve faulted in at creation) steps bit for bit
+// as one that is not, through splits and restores. Catches a make_resident that writes elements
+// rather than room ahead of them, or drops a relayout scratch's content.
+TEST_P(Api, AResidentSheetStepsAsAnother) {
+  SheetDesc d = small_grid(GetParam(), 24);
+  d.params = paper_params();
+  SheetDesc r = d;
+  r.resident = true;
+  Sheet a = Sheet::create(d), b = Sheet::create(r);
+  int events = 0;
+  for (int f = 0; f < 90; ++f) {
+    const FrameEvents ea = a.step(1.0 / 60), eb = b.step(1.0 / 60);
+    ASSERT_EQ(ea.splits, eb.splits) << f;
+    ASSERT_EQ(ea.restores, eb.restores) << f;
+    events += ea.splits + ea.restores;
+  }
+  EXPECT_GT(events, 0);
+  ASSERT_EQ(a.vertex_ids(), b.vertex_ids());
+  EXPECT_TRUE(std::equal(a.positions().begin(), a.positions().end(), b.positions().begin(), b.positions().end()));
+}
+
 // Catches a clock that rounds frame_dt into h differently from call to call (a varying step
 // count at a constant frame rate) or drops the remainder of a short frame.
 TEST_P(Api, FixedStepsWithTheRemainderCarried) {

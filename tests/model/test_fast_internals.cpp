@@ -643,6 +643,37 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
   EXPECT_EQ(sim.relayout_phases(), 5u);
 }
 
+// make_resident faults in every array's whole room, the steps that follow grow into it without
+// reallocating, and a copy is resident too. Catches an array of the topology left out (the
+// loop), the large ones named below left out of Topology::for_each_array, a copy touched only as
+// far as keep_warm's eighth, and a mesh that outgrew its reserve (the test would say nothing).
+TEST(Resident, EveryArrayKeepsItsWholeRoomFaultedIn) {
+  // N = 128: the named arrays' reserves pass a huge page, below which an array keeps all of its
+  // room faulted in anyway (Array::keep_warm).
+  fast::FastSimulator sim(make_grid(128), paper_params(), 2);
+  sim.make_resident();
+  const fast::Topology& m = sim.topology();
+  auto all_resident = [](const fast::Topology& t) {
+    std::string cold;
+    t.for_each_array([&](const auto& a) {
+      if (a.touched() != a.capacity()) cold += std::to_string(a.capacity()) + ' ';
+    });
+    const bool named = t.V.springs.touched() == t.V.springs.capacity() && t.E.slots.touched() == t.E.slots.capacity() &&
+                       t.T.slots.touched() == t.T.slots.capacity() && t.records.touched() == t.records.capacity();
+    if (!named) cold += "named ";
+    return cold;
+  };
+  EXPECT_EQ(all_resident(m), "");
+  const std::size_t edges_room = m.E.slots.capacity();
+  const int vertices = m.V.size();
+  for (int step = 0; step < 60; ++step) sim.step();
+  ASSERT_GT(m.V.size(), vertices);  // it grew
+  EXPECT_EQ(m.E.slots.capacity(), edges_room);  // within its reserve
+  EXPECT_EQ(all_resident(m), "");
+  const fast::FastSimulator copy(sim);
+  EXPECT_EQ(all_resident(copy.topology()), "");
+}
+
 // Grows sim without relayouts, then runs a relayout's first four phases (through the edges'
 // order) with relayouts off after them: the next step moves the edges, and no other starts.
 void stop_before_the_edges_move(fast::FastSimulator& sim) {

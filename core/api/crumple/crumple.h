@@ -68,6 +68,12 @@ struct SheetDesc {
   Params params = embedding_params();
   std::string backend = "fast";    ///< "fast" (float, SoA, oneTBB) or "reference" (double)
   int threads = 0;                 ///< 0: the caller's oneTBB arena; n: an own arena of n
+  /// Fault in at creation all the memory the sheet reserves for its growth (the fast backend:
+  /// room for 4x the input's elements), so that step() takes no page fault until the sheet
+  /// outgrows it: a longer load and more resident memory (about 1.5x at N = 256) for shorter
+  /// longest frames where a first touch is slow, as on VMs that hand free memory back to their
+  /// host (docs/DECISIONS.md D16).
+  bool resident = false;
 };
 
 /// What one step() call did.
