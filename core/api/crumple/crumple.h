@@ -70,9 +70,9 @@ struct SheetDesc {
   int threads = 0;                 ///< 0: the caller's oneTBB arena; n: an own arena of n
   /// Fault in at creation all the memory the sheet reserves for its growth (the fast backend:
   /// room for 4x the input's elements), so that step() takes no page fault until the sheet
-  /// outgrows it: a longer load and more resident memory (about 1.5x at N = 256) for shorter
+  /// outgrows it: a longer load and the whole reserve resident from the start, for shorter
   /// longest frames where a first touch is slow, as on VMs that hand free memory back to their
-  /// host (docs/DECISIONS.md D16).
+  /// host (docs/DECISIONS.md D16 has what it saved).
   bool resident = false;
 };
 
