@@ -81,8 +81,11 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// of it: memory that a later step will write, faulted in by a step with time to spare
   /// (LayoutScratch::warm). Returns the bytes it touched.
   std::size_t warm_to(std::size_t target, std::size_t budget) {
-    const std::size_t from = touched();
-    const std::size_t to = std::min({target, this->capacity(), from + budget / sizeof(T)});
+    const std::size_t from = touched(), capacity = this->capacity();
+    if (from >= capacity) return 0;
+    // The budget in elements, at most the room left: from + SIZE_MAX / sizeof(T) would wrap
+    // for one-byte elements (an unbounded budget) and touch nothing.
+    const std::size_t to = std::min({target, capacity, from + std::min(budget / sizeof(T), capacity - from)});
     if (to <= from) return 0;
     touch_pages(this->data() + from, this->data() + to);
     warmed_ = to;

@@ -25,6 +25,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   const std::size_t room = (params_.fracture ? 4 : 1);
   topo_.reserve(room * nv, room * 2 * nt, room * nt);
   step_.reserve(room * nv, room * 2 * nt);
+  if (axial()) step_.wsum.reserve_warm(room * nv);  // fit_blocks sizes it: room, as the others'
   decisions_.reserve_warm(room * 2 * nt);
   stamps_.reserve(room * nt);
   vertex_stamp_.reserve_warm(room * nv);

@@ -136,7 +136,7 @@ TEST_P(Api, CallersMeshKeepsItsIds) {
 
 // A resident sheet (SheetDesc::resident: its reserve faulted in at creation) steps bit for bit
 // as one that is not, through splits and restores. Catches a make_resident that writes elements
-// rather than room ahead of them, or drops a relayout scratch's content.
+// rather than room ahead of them.
 TEST_P(Api, AResidentSheetStepsAsAnother) {
   SheetDesc d = small_grid(GetParam(), 24);
   d.params = paper_params();
