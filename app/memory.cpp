@@ -33,9 +33,11 @@ std::uint64_t left_under(int resource, std::uint64_t used) {
 
 }  // namespace
 
-std::uint64_t estimate_run_bytes(const std::string& backend, std::size_t vertices) {
+std::uint64_t estimate_run_bytes(const std::string& backend, std::size_t vertices, bool resident) {
+  const std::uint64_t program = std::uint64_t{64} << 20;
+  if (resident && backend == "fast") return 7000 * std::uint64_t(vertices) + program;
   const std::uint64_t per_vertex = backend == "fast" ? 1600 : 1000;
-  return 2 * per_vertex * vertices + (std::uint64_t{64} << 20);
+  return 2 * per_vertex * vertices + program;
 }
 
 std::uint64_t available_bytes() {

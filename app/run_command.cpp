@@ -1,5 +1,6 @@
 #include "run_command.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -61,13 +62,13 @@ std::string check_options(const RunOptions& o) {
 
 // Empty if the run fits in the memory this process may take; otherwise why not.
 std::string check_memory(const RunOptions& o, std::size_t vertices) {
-  const std::uint64_t need = estimate_run_bytes(o.backend, vertices), have = available_bytes();
+  const std::uint64_t need = estimate_run_bytes(o.backend, vertices, o.resident), have = available_bytes();
   if (need <= have) return {};
   char text[200];
   std::snprintf(text, sizeof text,
-                "the run needs about %.2f GB of memory (%zu vertices, %s backend, room to refine) but "
+                "the run needs about %.2f GB of memory (%zu vertices, %s backend, room to refine%s) but "
                 "%.2f GB are available",
-                need * 1e-9, vertices, o.backend.c_str(), have * 1e-9);
+                need * 1e-9, vertices, o.backend.c_str(), o.resident ? ", resident" : "", have * 1e-9);
   return text;
 }
 
@@ -124,15 +125,22 @@ Outcome simulate(Sheet& sheet, const RunOptions& o, AtomicFile* stats) {
   return r;
 }
 
+/// The process's peak resident memory so far, in MiB (getrusage's ru_maxrss, KiB on Linux).
+double peak_resident_mib() {
+  rusage u{};
+  return getrusage(RUSAGE_SELF, &u) == 0 ? double(u.ru_maxrss) / 1024.0 : 0.0;
+}
+
 void report(const Outcome& r, const RunOptions& o, const Sheet& sheet) {
   if (r.code > 128) {
     std::fprintf(stderr, "crumple: interrupted by %s after frame %d of %d%s\n",
                  r.code == 128 + SIGINT ? "SIGINT" : "SIGTERM", r.frames_done, o.frames,
                  o.out.empty() ? "" : "; stats.csv and final.obj hold the frames done");
   } else if (r.code == kOk && !o.quiet) {
-    std::printf("crumple: %d frames, %s backend: %d vertices, %d triangles, %ld splits, %ld restores, %.3f ms/frame\n",
+    std::printf("crumple: %d frames, %s backend: %d vertices, %d triangles, %ld splits, %ld restores, %.3f ms/frame, "
+                "peak memory %.0f MiB\n",
                 o.frames, sheet.backend(), sheet.stats().vertices, sheet.stats().triangles, r.splits, r.restores,
-                r.total_ms / o.frames);
+                r.total_ms / o.frames, peak_resident_mib());
   }
 }
 

@@ -232,7 +232,8 @@ void FastSimulator::warm_layout() {
 
 // Every Array's whole room: the topology's and the step's (reserved for 4x the input in the
 // constructor), the topology pass's and the relayout's scratch. Array::keep_warm then never
-// touches memory (it finds the room touched), and a copy touches what its original has.
+// touches memory (it finds the room touched), and a copy touches what its original has. Within
+// a relayout too: the scratch keeps the edges' order that the next phase reads.
 void FastSimulator::make_resident() {
   auto whole = [](auto& a) { a.make_resident(); };
   topo_.for_each_array(whole);
@@ -242,7 +243,7 @@ void FastSimulator::make_resident() {
   stamps_.make_resident();
   rounds_.make_resident();
   waves_.make_resident();
-  if (layout_phase_ == 0) layout_scratch_.make_resident(topo_, par_.threads());  // not within a relayout
+  layout_scratch_.make_resident(topo_, par_.threads());
 }
 
 std::vector<std::string> FastSimulator::pass_names() const {

@@ -102,6 +102,7 @@ class FastSimulator final : public Simulator {
   /// Seconds spent in each pass since construction (steps only).
   const std::array<double, int(Pass::kCount)>& pass_seconds() const { return pass_seconds_; }
   const Topology& topology() const { return topo_; }
+  const LayoutScratch& layout_scratch() const { return layout_scratch_; }
   /// When to relayout: once the vertices created since the last one reach this fraction of the
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
   /// but for the last bits of the momentum correction (layout.h). A relayout's later phases

@@ -171,6 +171,7 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
   const std::size_t counts = std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1);  // stable_pass
   room(s.count, counts, counts);
 }
+
 }  // namespace
 
 std::size_t LayoutScratch::warm(const Topology& m, int threads, std::size_t budget) {
@@ -194,9 +195,17 @@ std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {
 
 void LayoutScratch::make_resident(const Topology& m, int threads) {
   for_each_room(*this, m, threads, [&](auto& a, std::size_t, std::size_t capacity) {
-    if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts
+    a.reserve(capacity);  // with the elements: within a relayout the edges' order is read next
     a.make_resident();
   });
+}
+
+bool LayoutScratch::resident(const Topology& m, int threads) const {
+  bool whole = true;
+  for_each_room(*this, m, threads, [&](const auto& a, std::size_t, std::size_t capacity) {
+    whole = whole && a.capacity() >= capacity && a.touched() == a.capacity();
+  });
+  return whole;
 }
 
 bool layout_stale(const Topology& m, double fraction) {

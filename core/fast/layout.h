@@ -63,8 +63,11 @@ struct LayoutScratch {
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
   /// Faults in all of the room: each spare at its array's capacity, each order's scratch at
-  /// what reserve() gave it (FastSimulator::make_resident). Only between relayouts.
+  /// what reserve() gave it (FastSimulator::make_resident). Keeps the contents: callable
+  /// within a relayout.
   void make_resident(const Topology& m, int threads);
+  /// Whether all the room make_resident() faults in is faulted in.
+  bool resident(const Topology& m, int threads) const;
 
   Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;
   Array<std::uint64_t> code, code2;

@@ -126,11 +126,36 @@ TEST(Cli, MemoryIsEstimatedAndExhaustionIsOneLine) {
   expect_error(huge, 2, "GB of memory");
   if (CRUMPLE_SANITIZED) GTEST_SKIP() << "sanitizers reserve more address space than ulimit -v allows";
   expect_error(crumple("run --grid 700 --frames 1", "ulimit -v 400000;"), 2, "GB of memory");
+  // --resident faults in the fast backend's whole reserve at load, about 2x the plain estimate
+  // at N = 512 (0.9 GB): refused up front, not by the kernel partway.
+  expect_error(crumple("run --grid 512 --frames 1 --resident", "ulimit -v 1400000;"), 2, "resident) but");
   // A 250 MB file cannot even be read under a 200 MB address-space limit: bad_alloc in load_obj.
   const fs::path big = write_file("crumple_cli_big.obj", "");
   fs::resize_file(big, 250u << 20);
   expect_error(crumple("run --mesh " + big.string(), "ulimit -v 200000;"), 2, "out of memory");
   fs::remove(big);
+}
+
+// The peak memory on the summary line, in MiB.
+double peak_memory_mib(const std::string& out) {
+  const std::string key = "peak memory ";
+  const std::size_t at = out.find(key);
+  return at == std::string::npos ? -1.0 : std::stod(out.substr(at + key.size()));
+}
+
+// The summary line ends with the peak resident memory, which --resident raises (the fast
+// backend's reserve for growth faulted in at load). Catches the flag not reaching the sheet
+// (SheetDesc::resident) and a summary without the peak.
+TEST(Cli, ResidentRaisesThePeakMemoryOnTheSummaryLine) {
+  const fs::path d = fresh_dir("resident");
+  const Result plain = crumple("run --grid 128 --frames 1 --force --out " + d.string());
+  const Result resident = crumple("run --grid 128 --frames 1 --force --resident --out " + d.string());
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  ASSERT_EQ(resident.code, 0) << resident.err;
+  const double a = peak_memory_mib(plain.out), b = peak_memory_mib(resident.out);
+  EXPECT_GT(a, 10) << plain.out;
+  EXPECT_GT(b, a + 20) << plain.out << resident.out;
+  fs::remove_all(d);
 }
 
 // Catches: reading any path (before: /dev/zero was read without end and a FIFO with no writer

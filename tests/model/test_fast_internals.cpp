@@ -680,6 +680,7 @@ TEST(Resident, EveryArrayKeepsItsWholeRoomFaultedIn) {
     return cold;
   };
   EXPECT_EQ(cold_arrays(m), "");
+  EXPECT_TRUE(sim.layout_scratch().resident(m, 2));
   const std::size_t edges_room = m.E.slots.capacity();
   const int vertices = m.V.size();
   sim.set_layout_fraction(0);  // relayouts through the steps: every move swaps arrays and spares
@@ -688,6 +689,7 @@ TEST(Resident, EveryArrayKeepsItsWholeRoomFaultedIn) {
   ASSERT_GE(sim.relayout_phases(), 10u);
   EXPECT_EQ(m.E.slots.capacity(), edges_room);  // within its reserve
   EXPECT_EQ(cold_arrays(m), "");
+  EXPECT_TRUE(sim.layout_scratch().resident(m, 2));
   const fast::FastSimulator copy(sim);
   EXPECT_EQ(cold_arrays(copy.topology()), "");
 }
@@ -699,6 +701,25 @@ void stop_before_the_edges_move(fast::FastSimulator& sim) {
   sim.set_layout_fraction(0);
   for (int phase = 0; phase < 4; ++phase) sim.step();
   sim.set_layout_fraction(-1);
+}
+
+// make_resident called between the edges' order and their move (the one point where the
+// relayout's scratch holds what the next phase reads) faults the scratch in and keeps the
+// order. Catches a call that skips the scratch within a relayout, and one that reallocates the
+// orders empty (the move would then not sort the edges, or break the topology).
+TEST(Resident, BetweenTheEdgesOrderAndTheirMoveKeepsTheOrder) {
+  fast::FastSimulator sim(make_grid(128), paper_params(), 2);
+  const fast::Topology& m = sim.topology();
+  stop_before_the_edges_move(sim);
+  ASSERT_EQ(sim.relayout_phases(), 4u);
+  ASSERT_FALSE(sim.layout_scratch().resident(m, 2));
+  sim.make_resident();
+  EXPECT_TRUE(sim.layout_scratch().resident(m, 2));
+  sim.set_adaptivity(false, false);  // no edge created or freed between the order and the move
+  sim.step();
+  ASSERT_EQ(sim.relayout_phases(), 5u);
+  ASSERT_EQ(sim.check_topology(), "");
+  EXPECT_TRUE(edges_in_vertex_order(m));
 }
 
 // The edges' order is taken a step before the edges move (phases four and five), so the events
