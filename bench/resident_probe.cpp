@@ -1,0 +1,167 @@
+// crumple_resident_probe: what `--resident` (Simulator::make_resident, SheetDesc::resident)
+// costs and saves in a continuous run of the paper's crumple, as an engine runs it: one fast
+// simulator from the flat sheet, no clone (the benchmarks' clones recycle memory another clone
+// just freed, which a growing sheet in a running game does not). Each round makes two
+// simulators one after the other, plain and resident (which goes first alternates), runs frames
+// 1 to FROM - 1 untimed and times frames FROM to TO one by one. Per run: the load (construction,
+// and make_resident), each timed frame's time (mean, median, 90th percentile, longest), the page
+// faults and the layout pass's time a frame (the relayout phases and LayoutScratch::warm's first
+// touches), and the resident set at the end. The summary gives each mode's medians over the
+// rounds and the medians of the rounds' paired ratios resident / plain. The two runs of a round
+// must end in the same state (make_resident touches memory, never the model): the probe exits
+// 1 if they do not.
+// Usage: crumple_resident_probe N THREADS FROM TO ROUNDS
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fast/fast_sim.h"
+#include "mesh/input_mesh.h"
+#include "model/params.h"
+#include "probe_common.h"
+#include "sim/run.h"
+
+namespace {
+
+using crumple::fast::FastSimulator;
+using crumple::fast::Pass;
+using Clock = std::chrono::steady_clock;
+
+struct RunResult {
+  double load_ms = 0;
+  double mean_ms = 0, median_ms = 0, p90_ms = 0, longest_ms = 0;  ///< over the timed frames
+  double faults = 0;     ///< minor page faults a timed frame (mean)
+  double layout_ms = 0;  ///< the layout pass a timed frame (mean)
+  double rss_mib = 0;    ///< resident set after the last frame
+  crumple::Totals end;   ///< the state after the last frame (both modes must agree)
+};
+
+double minor_faults() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_minflt);
+}
+
+/// The process's resident set now (VmRSS in /proc/self/status), MiB; 0 where there is none.
+double resident_mib() {
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);)
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+  return 0;
+}
+
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+/// The value below which `share` of v lies (nearest rank).
+double percentile(std::vector<double> v, double share) {
+  std::sort(v.begin(), v.end());
+  const std::size_t k = std::min(v.size() - 1, std::size_t(share * double(v.size())));
+  return v[k];
+}
+
+RunResult run(int n, int threads, int from, int to, bool resident) {
+  const crumple::Params params = crumple::paper_params();
+  RunResult r;
+  const Clock::time_point t0 = Clock::now();
+  FastSimulator sim(crumple::make_grid(n), params, threads);
+  if (resident) sim.make_resident();
+  r.load_ms = ms_since(t0);
+  for (int f = 1; f < from; ++f) crumple::run_frame(sim, params, f);
+  std::vector<double> frames;
+  const double faults_before = minor_faults(), layout_before = sim.pass_seconds()[int(Pass::Layout)];
+  for (int f = from; f <= to; ++f) {
+    const Clock::time_point start = Clock::now();
+    crumple::run_frame(sim, params, f);
+    frames.push_back(ms_since(start));
+  }
+  const double count = double(frames.size());
+  for (double ms : frames) r.mean_ms += ms / count;
+  r.median_ms = crumple::bench::median(frames);
+  r.p90_ms = percentile(frames, 0.9);
+  r.longest_ms = *std::max_element(frames.begin(), frames.end());
+  r.faults = (minor_faults() - faults_before) / count;
+  r.layout_ms = 1e3 * (sim.pass_seconds()[int(Pass::Layout)] - layout_before) / count;
+  r.rss_mib = resident_mib();
+  r.end = sim.totals();
+  return r;
+}
+
+bool same_state(const crumple::Totals& a, const crumple::Totals& b) {
+  return a.vertices == b.vertices && a.triangles == b.triangles && a.edges == b.edges && a.kinetic == b.kinetic &&
+         a.momentum[0] == b.momentum[0] && a.momentum[1] == b.momentum[1] && a.momentum[2] == b.momentum[2];
+}
+
+void print_run(int round, const char* mode, const RunResult& r) {
+  std::printf("round %d, %-8s load %8.1f ms | frame mean %7.2f median %7.2f p90 %7.2f longest %7.2f ms | "
+              "faults %7.1f a frame | layout %6.2f ms a frame | rss %7.1f MiB\n",
+              round, mode, r.load_ms, r.mean_ms, r.median_ms, r.p90_ms, r.longest_ms, r.faults, r.layout_ms, r.rss_mib);
+  std::fflush(stdout);
+}
+
+/// One row of the summary: a figure's median over the rounds in each mode and the median of
+/// the rounds' ratios resident / plain (over the rounds whose plain figure is not 0; "-" if none).
+void print_row(const char* what, const std::vector<RunResult>& plain, const std::vector<RunResult>& resident,
+               double RunResult::*field) {
+  std::vector<double> a, b, ratio;
+  for (std::size_t k = 0; k < plain.size(); ++k) {
+    a.push_back(plain[k].*field);
+    b.push_back(resident[k].*field);
+    if (plain[k].*field > 0) ratio.push_back(resident[k].*field / (plain[k].*field));
+  }
+  using crumple::bench::median;
+  std::printf("%-18s %10.2f %10.2f", what, median(a), median(b));
+  if (ratio.empty())
+    std::printf(" %8s\n", "-");
+  else
+    std::printf(" %8.3f\n", median(ratio));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 6) {
+    std::fprintf(stderr, "usage: crumple_resident_probe N THREADS FROM TO ROUNDS\n");
+    return 2;
+  }
+  auto number = [](const char* text, const char* what) {
+    return int(crumple::bench::parse_number("crumple_resident_probe", text, what, true));
+  };
+  const int n = number(argv[1], "N"), threads = number(argv[2], "THREADS");
+  const int from = number(argv[3], "FROM"), to = number(argv[4], "TO"), rounds = number(argv[5], "ROUNDS");
+  if (n < 4 || threads < 1 || from < 1 || to < from || rounds < 1) {
+    std::fprintf(stderr, "crumple_resident_probe: N must be >= 4, THREADS and ROUNDS >= 1, 1 <= FROM <= TO\n");
+    return 2;
+  }
+  std::printf("N = %d, %d thread(s), frames %d to %d of the paper's crumple timed, %d round(s)\n", n, threads, from,
+              to, rounds);
+  std::vector<RunResult> plain, resident;
+  for (int round = 1; round <= rounds; ++round) {
+    for (bool make_resident : {round % 2 == 0, round % 2 == 1}) {
+      const RunResult r = run(n, threads, from, to, make_resident);
+      (make_resident ? resident : plain).push_back(r);
+      print_run(round, make_resident ? "resident" : "plain", r);
+    }
+    if (!same_state(plain.back().end, resident.back().end)) {
+      std::fprintf(stderr, "crumple_resident_probe: round %d: the resident run ended in another state\n", round);
+      return 1;
+    }
+  }
+  std::printf("\nmedians over %d round(s) (ms; faults a frame; rss MiB)\n", rounds);
+  std::printf("%-18s %10s %10s %8s\n", "", "plain", "resident", "ratio");
+  print_row("load", plain, resident, &RunResult::load_ms);
+  print_row("frame mean", plain, resident, &RunResult::mean_ms);
+  print_row("frame median", plain, resident, &RunResult::median_ms);
+  print_row("frame p90", plain, resident, &RunResult::p90_ms);
+  print_row("frame longest", plain, resident, &RunResult::longest_ms);
+  print_row("faults", plain, resident, &RunResult::faults);
+  print_row("layout", plain, resident, &RunResult::layout_ms);
+  print_row("rss", plain, resident, &RunResult::rss_mib);
+  return 0;
+}
