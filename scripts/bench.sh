@@ -118,4 +118,4 @@ rm -f "$dest/machine.json"
 headline=()
 if ((!quick)) && [ -z "$out" ]; then headline=(--headline "$root/results/frame_time.png"); fi
 "$py" "$root/scripts/bench_report.py" "$json" --run "$dest/run.json" --out "$dest" "${headline[@]}"
-echo "bench.sh: done in ${elapsed}s of benchmarking; results in ${dest#$root/}/"
+echo "bench.sh: done in ${elapsed}s of benchmarking; results in ${dest#"$root"/}/"

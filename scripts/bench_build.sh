@@ -1,4 +1,5 @@
-# Sourced by the scripts that build benchmark binaries (bench.sh, layout_probe.sh), after they
+# shellcheck shell=bash disable=SC2154  # sourced: the caller sets $root
+# Sourced by the scripts that build benchmark binaries (bench.sh and the probes' scripts), after they
 # set $root.
 
 # bench_setup: installs what a fresh machine lacks, then sets `rev`, the revision measured (taken
@@ -19,4 +20,55 @@ build_bench() {
   cmake -S "$root" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DCRUMPLE_BUILD_BENCH=ON \
         -DCRUMPLE_BUILD_TESTS=OFF "$@" > "$dir.cmake.log" 2>&1 || { cat "$dir.cmake.log"; exit 1; }
   cmake --build "$dir" -j "$(nproc)" --target "$target"
+}
+
+# The probes' scripts (layout_probe.sh, resident_probe.sh) share their options' parsing and their
+# output file.
+
+# probe_options "NAME ..." ARGS...: sets the global variable NAME for each `--NAME VALUE` in
+# ARGS whose NAME is listed; -h/--help prints the calling script's header comment (lines 2-9);
+# anything else exits 2 naming it.
+probe_options() {
+  local names=" $1 " me
+  me=$(basename "$0")
+  shift
+  while (($#)); do
+    case "$1" in
+      -h | --help) sed -n '2,9p' "$0"; exit 0 ;;
+      *)
+        [[ $1 == --* && $names == *" ${1#--} "* ]] || { echo "$me: unknown argument '$1' (see --help)" >&2; exit 2; }
+        (($# >= 2)) || { echo "$me: $1 needs a value" >&2; exit 2; }
+        declare -g "${1#--}=$2"
+        shift ;;
+    esac
+    shift
+  done
+}
+
+# probe_begin TARGET NAME: installs what a fresh machine lacks, builds TARGET in the bench build
+# and sets `probe` (its path), `out` (results/<machine-tag>/NAME.txt unless already set) and
+# `tmp`, the file the run collects into (removed on exit unless probe_end moves it), headed by
+# the script, the revision, the time, the CPU and the load.
+probe_begin() {
+  bench_setup
+  build_bench "$build" "$1"
+  # shellcheck disable=SC2034  # read by the caller
+  probe=$build/bench/$1
+  local tag
+  tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
+  out=${out:-$root/results/$tag/$2.txt}
+  mkdir -p "$(dirname "$out")"
+  tmp=$(mktemp)
+  trap 'rm -f "$tmp"' EXIT
+  {
+    echo "# scripts/$(basename "$0") at $rev, $(date -u +%Y-%m-%dT%H:%M:%SZ)"
+    echo "# $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) CPUs; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+  } > "$tmp"
+}
+
+# probe_end: moves the collected run to `out`.
+probe_end() {
+  mv "$tmp" "$out"
+  trap - EXIT
+  echo "$(basename "$0"): wrote $out" >&2
 }
