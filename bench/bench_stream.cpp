@@ -20,21 +20,18 @@
 // Reported: bytes_per_second (a kIsRate counter of the bytes above: GB/s in the report), and
 // the time per pass (manual time, steady_clock).
 #include <oneapi/tbb/global_control.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/partitioner.h>
 
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 #include <memory>
 #include <numeric>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "bench_common.h"
 #include "fast/aligned.h"
+#include "stream_kernels.h"
 
 namespace crumple::bench {
 namespace {
@@ -60,13 +57,7 @@ std::size_t array_mib() {
 const std::size_t kArrayMiB = array_mib();
 const std::size_t kElements = kArrayMiB * 1024 * 1024 / sizeof(double);
 
-/// The read kernel's sums: kAccumulators vectors of kLaneCount doubles (one AVX-512 register).
-typedef double Lanes __attribute__((vector_size(64)));
-constexpr std::size_t kLaneCount = sizeof(Lanes) / sizeof(double), kAccumulators = 4;
-constexpr std::size_t kStep = kLaneCount * kAccumulators;
-
 enum class Kernel { Read, Copy, Triad, Gather };
-constexpr std::size_t kLineDoubles = 64 / sizeof(double);
 const std::size_t kLines = kElements / kLineDoubles;
 /// Bytes a pass moves, as STREAM counts them (the gather: every line it reads, whole).
 double pass_bytes(Kernel k) {
@@ -87,42 +78,13 @@ struct Arrays {
   std::vector<std::uint32_t> lines;  ///< the gather's line order: a random permutation
 };
 
-/// Runs f(t, begin, end) over [0, n) in `threads` equal chunks t, one per thread.
-template <class F>
-void for_chunks(int threads, F f, std::size_t n = kElements) {
-  const std::size_t chunk = (n + std::size_t(threads) - 1) / std::size_t(threads);
-  tbb::parallel_for(
-      0, threads,
-      [&](int t) {
-        const std::size_t begin = std::size_t(t) * chunk;
-        f(t, begin, std::min(n, begin + chunk));
-      },
-      tbb::static_partitioner());
-}
-
 Arrays make_arrays(int threads, Kernel kernel) {
   Arrays m{make_doubles(), make_doubles(), make_doubles(), {}};
-  for_chunks(threads, [&](int, std::size_t b, std::size_t e) {  // first touch by the thread that streams it
+  for_thread_chunks(threads, kElements, [&](int, std::size_t b, std::size_t e) {  // first touch by the thread that streams it
     for (std::size_t i = b; i < e; ++i) m.a[i] = 1.0, m.b[i] = 2.0, m.c[i] = 0.5;
   });
-  if (kernel == Kernel::Gather) {
-    m.lines.resize(kLines);
-    std::iota(m.lines.begin(), m.lines.end(), 0u);
-    std::shuffle(m.lines.begin(), m.lines.end(), std::mt19937_64(1));  // fixed: every run reads one order
-  }
+  if (kernel == Kernel::Gather) m.lines = random_line_order(kLines);
   return m;
-}
-
-/// s += a[8 p[i]] over the chunk, in independent sums (the loads overlap as far as the core's
-/// outstanding misses allow: that limit is what the kernel measures).
-double gather_lines(const double* __restrict a, const std::uint32_t* __restrict lines, std::size_t begin,
-                    std::size_t end) {
-  double s[4] = {0, 0, 0, 0};
-  std::size_t i = begin;
-  for (; i + 4 <= end; i += 4)
-    for (std::size_t l = 0; l < 4; ++l) s[l] += a[std::size_t(lines[i + l]) * kLineDoubles];
-  for (; i < end; ++i) s[0] += a[std::size_t(lines[i]) * kLineDoubles];
-  return (s[0] + s[1]) + (s[2] + s[3]);
 }
 
 /// One pass of the kernel; returns a value that depends on every element read (read kernel).
@@ -132,29 +94,14 @@ double run(Kernel k, Arrays& m, int threads) {
   double* __restrict c = m.c.get();
   std::vector<double> partial(std::size_t(threads), 0.0);
   if (k == Kernel::Gather) {
-    for_chunks(
-        threads, [&](int t, std::size_t b, std::size_t e) { partial[std::size_t(t)] = gather_lines(a, m.lines.data(), b, e); },
-        kLines);
+    for_thread_chunks(threads, kLines, [&](int t, std::size_t b, std::size_t e) {
+      partial[std::size_t(t)] = gather_lines(a, m.lines.data(), b, e);
+    });
     return std::accumulate(partial.begin(), partial.end(), 0.0);
   }
-  for_chunks(threads, [&](int t, std::size_t begin, std::size_t end) {
+  for_thread_chunks(threads, kElements, [&](int t, std::size_t begin, std::size_t end) {
     if (k == Kernel::Read) {
-      // Wide independent sums: a scalar sum is a chain of dependent adds, bound by the add's
-      // latency, not by memory; GCC does not vectorize the reduction without -ffast-math, so
-      // the lanes are spelled out.
-      Lanes acc[kAccumulators] = {};
-      std::size_t i = begin;
-      for (; i + kStep <= end; i += kStep)
-        for (std::size_t l = 0; l < kAccumulators; ++l) {
-          Lanes x;
-          std::memcpy(&x, a + i + l * kLaneCount, sizeof x);
-          acc[l] += x;
-        }
-      double s = 0;
-      for (; i < end; ++i) s += a[i];
-      for (const Lanes& x : acc)
-        for (std::size_t l = 0; l < kLaneCount; ++l) s += x[l];
-      partial[std::size_t(t)] = s;
+      partial[std::size_t(t)] = read_sum(a, begin, end);
     } else if (k == Kernel::Copy) {
       for (std::size_t i = begin; i < end; ++i) c[i] = a[i];
     } else {
