@@ -62,13 +62,15 @@ std::string check_options(const RunOptions& o) {
 
 // Empty if the run fits in the memory this process may take; otherwise why not.
 std::string check_memory(const RunOptions& o, std::size_t vertices) {
-  const std::uint64_t need = estimate_run_bytes(o.backend, vertices, o.resident), have = available_bytes();
+  // Without fracture the fast backend reserves no room to grow: resident, it holds what it uses.
+  const bool resident = o.resident && o.backend == "fast" && o.params.fracture;
+  const std::uint64_t need = estimate_run_bytes(o.backend, vertices, resident), have = available_bytes();
   if (need <= have) return {};
   char text[200];
   std::snprintf(text, sizeof text,
                 "the run needs about %.2f GB of memory (%zu vertices, %s backend, room to refine%s) but "
                 "%.2f GB are available",
-                need * 1e-9, vertices, o.backend.c_str(), o.resident ? ", resident" : "", have * 1e-9);
+                need * 1e-9, vertices, o.backend.c_str(), resident ? ", resident" : "", have * 1e-9);
   return text;
 }
 

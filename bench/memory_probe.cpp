@@ -26,6 +26,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using crumple::bench::for_thread_chunks;
 
+/// The largest array whose 64-byte lines a 32-bit line order numbers (random_line_order).
+constexpr std::size_t kMaxMiB = (std::size_t{1} << 32) * 64 / (1 << 20) - 1;
+
 struct Rates {
   double read_gbs = 0;     ///< streaming read, GB/s
   double line_ns = 0;      ///< random lines: ns a line on each thread
@@ -91,19 +94,20 @@ int main(int argc, char** argv) {
   auto number = [](const char* text, const char* what) {
     return crumple::bench::parse_number("crumple_memory_probe", text, what, true);
   };
-  const int threads = int(number(argv[1], "THREADS")), reps = int(number(argv[2], "REPS"));
+  const double threads_arg = number(argv[1], "THREADS"), reps_arg = number(argv[2], "REPS");
+  if (threads_arg < 1 || threads_arg > 1024 || reps_arg < 1 || reps_arg > 1000) {
+    std::fprintf(stderr, "crumple_memory_probe: THREADS must be in [1, 1024] and REPS in [1, 1000]\n");
+    return 2;
+  }
+  const int threads = int(threads_arg), reps = int(reps_arg);
   std::vector<std::size_t> sizes;
   for (int k = 3; k < argc; ++k) {
     const double mib = number(argv[k], "MiB");
-    if (mib < 1 || mib > 1 << 20) {
-      std::fprintf(stderr, "crumple_memory_probe: MiB must be in [1, 1048576], got '%s'\n", argv[k]);
+    if (mib < 1 || mib > kMaxMiB) {  // the line order's 32-bit indices
+      std::fprintf(stderr, "crumple_memory_probe: MiB must be in [1, %zu], got '%s'\n", kMaxMiB, argv[k]);
       return 2;
     }
     sizes.push_back(std::size_t(mib));
-  }
-  if (threads < 1 || reps < 1) {
-    std::fprintf(stderr, "crumple_memory_probe: THREADS and REPS must be >= 1\n");
-    return 2;
   }
   if (sizes.empty()) sizes = default_sizes();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));

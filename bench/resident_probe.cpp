@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -55,11 +56,11 @@ rusage usage() {
 
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-/// The value below which `share` of v lies (nearest rank).
+/// The `share` percentile of v by nearest rank: the ceil(share n)-th smallest value.
 double percentile(std::vector<double> v, double share) {
   std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, std::size_t(share * double(v.size())));
-  return v[k];
+  const std::size_t rank = std::max<std::size_t>(1, std::size_t(std::ceil(share * double(v.size()))));
+  return v[std::min(v.size(), rank) - 1];
 }
 
 RunResult run(int n, int threads, int from, int to, bool resident) {
@@ -94,6 +95,7 @@ RunResult run(int n, int threads, int from, int to, bool resident) {
 /// run() in a child process, its result sent back through a pipe; exits the probe if the child
 /// fails. The parent starts no thread, so the child forks from a single-threaded process.
 RunResult run_in_child(int n, int threads, int from, int to, bool resident) {
+  std::fflush(stdout);  // a child must not inherit lines still buffered
   int fd[2];
   if (pipe(fd) != 0) std::perror("crumple_resident_probe: pipe"), std::exit(1);
   const pid_t pid = fork();

@@ -55,7 +55,8 @@ inline double read_sum(const double* __restrict a, std::size_t begin, std::size_
   return s;
 }
 
-/// The gather's line order over `lines` lines: a random permutation, the same every run.
+/// The gather's line order over `lines` lines (at most 2^32): a random permutation, the same
+/// every run.
 inline std::vector<std::uint32_t> random_line_order(std::size_t lines) {
   std::vector<std::uint32_t> order(lines);
   std::iota(order.begin(), order.end(), 0u);

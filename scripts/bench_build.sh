@@ -22,8 +22,8 @@ build_bench() {
   cmake --build "$dir" -j "$(nproc)" --target "$target"
 }
 
-# The probes' scripts (layout_probe.sh, resident_probe.sh) share their options' parsing and their
-# output file.
+# The probes' scripts (layout_probe.sh, resident_probe.sh, memory_probe.sh) share their options'
+# parsing and their output file.
 
 # probe_options "NAME ..." ARGS...: sets the global variable NAME for each `--NAME VALUE` in
 # ARGS whose NAME is listed; -h/--help prints the calling script's header comment (lines 2-9);
@@ -37,7 +37,7 @@ probe_options() {
       -h | --help) sed -n '2,9p' "$0"; exit 0 ;;
       *)
         [[ $1 == --* && $names == *" ${1#--} "* ]] || { echo "$me: unknown argument '$1' (see --help)" >&2; exit 2; }
-        (($# >= 2)) || { echo "$me: $1 needs a value" >&2; exit 2; }
+        if (($# < 2)) || [[ $2 == --* ]]; then echo "$me: $1 needs a value" >&2; exit 2; fi
         declare -g "${1#--}=$2"
         shift ;;
     esac

@@ -127,7 +127,9 @@ TEST(Cli, MemoryIsEstimatedAndExhaustionIsOneLine) {
   if (CRUMPLE_SANITIZED) GTEST_SKIP() << "sanitizers reserve more address space than ulimit -v allows";
   expect_error(crumple("run --grid 700 --frames 1", "ulimit -v 400000;"), 2, "GB of memory");
   // --resident faults in the fast backend's whole reserve at load, about 2x the plain estimate
-  // at N = 512 (0.9 GB): refused up front, not by the kernel partway.
+  // at N = 512 (0.9 GB): the estimate must say so (a plain run is refused under this limit too,
+  // but by the allocator at its reserve; with physical memory short, a resident run that passed
+  // the check would be killed partway).
   expect_error(crumple("run --grid 512 --frames 1 --resident", "ulimit -v 1400000;"), 2, "resident) but");
   // A 250 MB file cannot even be read under a 200 MB address-space limit: bad_alloc in load_obj.
   const fs::path big = write_file("crumple_cli_big.obj", "");

@@ -136,6 +136,24 @@ TEST(Layout, ScratchCopyKeepsTheRoom) {
   EXPECT_GE(b.spare_rows.capacity(), 700u);
 }
 
+// LayoutScratch::make_resident gives each array its room and keeps its elements: within a
+// relayout the edges' order is read by the next phase. Catches a reserve that reallocates an
+// array empty (a clear before it), which happens when an array lacks room: a scratch never
+// reserved, as here, or a mesh past its reserve.
+TEST(Layout, MakeResidentKeepsTheScratchsElements) {
+  const fast::FastSimulator sim(make_grid(16), Params{}, 1);
+  fast::LayoutScratch s;
+  s.eorder.resize(3);
+  s.eorder[0] = 7, s.eorder[1] = 5, s.eorder[2] = 9;
+  ASSERT_FALSE(s.resident(sim.topology(), 1));
+  s.make_resident(sim.topology(), 1);
+  EXPECT_TRUE(s.resident(sim.topology(), 1));
+  ASSERT_EQ(s.eorder.size(), 3u);
+  EXPECT_EQ(s.eorder[0], 7);
+  EXPECT_EQ(s.eorder[1], 5);
+  EXPECT_EQ(s.eorder[2], 9);
+}
+
 // warm_to faults in the room from where the touched part ends (the elements, or room warmed
 // before) up to the target, no further than the capacity or the budget allows, and a copy is
 // touched as far as its original. Catches a warm that starts at the elements' end again (it
@@ -705,8 +723,9 @@ void stop_before_the_edges_move(fast::FastSimulator& sim) {
 
 // make_resident called between the edges' order and their move (the one point where the
 // relayout's scratch holds what the next phase reads) faults the scratch in and keeps the
-// order. Catches a call that skips the scratch within a relayout, and one that reallocates the
-// orders empty (the move would then not sort the edges, or break the topology).
+// order. Catches a call that skips the scratch within a relayout, and one that empties the
+// orders (the move would then not sort the edges, or break the topology); a reserve that
+// drops the elements only where room is lacking is Layout.MakeResidentKeepsTheScratchsElements'.
 TEST(Resident, BetweenTheEdgesOrderAndTheirMoveKeepsTheOrder) {
   fast::FastSimulator sim(make_grid(128), paper_params(), 2);
   const fast::Topology& m = sim.topology();
