@@ -14,8 +14,6 @@
 // memory), ms a frame over all the timed frames.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -48,11 +46,7 @@ struct RunResult {
 };
 
 /// The process's minor page faults so far.
-double minor_faults() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_minflt);
-}
+double minor_faults() { return double(crumple::bench::self_usage().ru_minflt); }
 
 RunResult run(const FastSimulator& prepared, const crumple::Params& params, int first_frame, int frames, double fraction) {
   std::unique_ptr<crumple::Simulator> clone = prepared.clone();

@@ -3,6 +3,8 @@
 // frames start, the probes' argument parsing and their medians.
 #pragma once
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -34,6 +36,13 @@ inline double parse_number(const char* program, const char* text, const char* wh
     std::exit(2);
   }
   return v;
+}
+
+/// This process's resource usage so far (page faults, peak resident set).
+inline rusage self_usage() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u;
 }
 
 /// The median of v (the mean of the middle two when their count is even).

@@ -12,7 +12,6 @@
 // resident / plain. The two runs of a round must end in the same state (make_resident touches
 // memory, never the model): the probe exits 1 if they do not.
 // Usage: crumple_resident_probe N THREADS FROM TO ROUNDS
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -48,12 +47,6 @@ struct RunResult {
 };
 static_assert(std::is_trivially_copyable_v<RunResult>, "sent through a pipe");
 
-rusage usage() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u;
-}
-
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 /// The `share` percentile of v by nearest rank: the ceil(share n)-th smallest value.
@@ -72,7 +65,7 @@ RunResult run(int n, int threads, int from, int to, bool resident) {
   r.load_ms = ms_since(t0);
   for (int f = 1; f < from; ++f) crumple::run_frame(sim, params, f);
   std::vector<double> frames;
-  const double faults_before = double(usage().ru_minflt);
+  const double faults_before = double(crumple::bench::self_usage().ru_minflt);
   const auto passes_before = sim.pass_seconds();
   for (int f = from; f <= to; ++f) {
     const Clock::time_point start = Clock::now();
@@ -84,7 +77,7 @@ RunResult run(int n, int threads, int from, int to, bool resident) {
   r.median_ms = crumple::bench::median(frames);
   r.p90_ms = percentile(frames, 0.9);
   r.longest_ms = *std::max_element(frames.begin(), frames.end());
-  const rusage u = usage();
+  const rusage u = crumple::bench::self_usage();
   r.faults = (double(u.ru_minflt) - faults_before) / count;
   r.peak_mib = double(u.ru_maxrss) / 1024.0;  // KiB on Linux
   for (int k = 0; k < int(Pass::kCount); ++k) r.pass_ms[k] = 1e3 * (sim.pass_seconds()[k] - passes_before[k]) / count;

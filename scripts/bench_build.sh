@@ -66,6 +66,15 @@ probe_begin() {
   } > "$tmp"
 }
 
+# probe_run LABEL ARGS...: runs the probe with ARGS, its output shown and collected, LABEL on
+# stderr first.
+probe_run() {
+  echo "$(basename "$0"): $1" >&2
+  shift
+  "$probe" "$@" | tee -a "$tmp"
+  echo >> "$tmp"
+}
+
 # probe_end: moves the collected run to `out`.
 probe_end() {
   mv "$tmp" "$out"

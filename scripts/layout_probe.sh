@@ -18,10 +18,8 @@ probe_begin crumple_layout_probe layout_fraction
 echo "# frames $frames, rounds $rounds, fractions $fractions" >> "$tmp"
 for n in $sizes; do
   for t in $threads; do
-    echo "layout_probe.sh: N = $n, $t thread(s)" >&2
     # shellcheck disable=SC2086  # the fractions are separate arguments
-    "$probe" "$n" "$t" "$frames" "$rounds" $fractions | tee -a "$tmp"
-    echo >> "$tmp"
+    probe_run "N = $n, $t thread(s)" "$n" "$t" "$frames" "$rounds" $fractions
   done
 done
 probe_end

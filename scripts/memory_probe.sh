@@ -17,8 +17,6 @@ probe_options "out threads reps" "$@"
 probe_begin crumple_memory_probe memory
 echo "# reps $reps; $(lscpu | sed -n 's/^L3 cache: *//p') L3" >> "$tmp"
 for t in $threads; do
-  echo "memory_probe.sh: $t thread(s)" >&2
-  "$probe" "$t" "$reps" | tee -a "$tmp"
-  echo >> "$tmp"
+  probe_run "$t thread(s)" "$t" "$reps"
 done
 probe_end

@@ -18,9 +18,7 @@ probe_begin crumple_resident_probe resident
 echo "# frames $from to $to timed, rounds $rounds" >> "$tmp"
 for n in $sizes; do
   for t in $threads; do
-    echo "resident_probe.sh: N = $n, $t thread(s)" >&2
-    "$probe" "$n" "$t" "$from" "$to" "$rounds" | tee -a "$tmp"
-    echo >> "$tmp"
+    probe_run "N = $n, $t thread(s)" "$n" "$t" "$from" "$to" "$rounds"
   done
 done
 probe_end

@@ -171,7 +171,6 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
   const std::size_t counts = std::size_t(std::clamp(threads, 1, kMaxRadixBlocks)) * (nv + 1);  // stable_pass
   room(s.count, counts, counts);
 }
-
 }  // namespace
 
 std::size_t LayoutScratch::warm(const Topology& m, int threads, std::size_t budget) {
