@@ -29,7 +29,7 @@ using crumple::fast::kLayoutPhases;
 std::vector<double> time_phases(const crumple::fast::Topology& m, const crumple::fast::Parallel& par) {
   crumple::fast::Topology copy = m;
   crumple::fast::LayoutScratch scratch;
-  scratch.warm(copy, par.threads(), SIZE_MAX);
+  scratch.warm(copy, par, SIZE_MAX);
   std::vector<double> ms;
   for (int phase = 0; phase < kLayoutPhases; ++phase) {
     const auto start = std::chrono::steady_clock::now();

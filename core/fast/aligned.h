@@ -24,6 +24,13 @@ void free_aligned(void* p, std::size_t bytes);
 /// element yet (its content is left to whatever constructs the elements there).
 void touch_pages(void* begin, void* end);
 
+/// Bytes [begin, end) of an array's room that nothing has touched yet: what touch_pages faults in.
+struct ColdRange {
+  char* begin = nullptr;
+  char* end = nullptr;
+  std::size_t bytes() const { return std::size_t(end - begin); }
+};
+
 template <class T>
 struct AlignedAllocator {
   using value_type = T;
@@ -81,15 +88,21 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// of it: memory that a later step will write, faulted in by a step with time to spare
   /// (LayoutScratch::warm). Returns the bytes it touched.
   std::size_t warm_to(std::size_t target, std::size_t budget) {
+    const ColdRange cold = claim_cold(target, budget);
+    touch_pages(cold.begin, cold.end);
+    return cold.bytes();
+  }
+  /// The room warm_to(target, budget) would fault in, counted as faulted in from now on: the
+  /// caller touches it (LayoutScratch::warm touches many arrays' ranges on every thread).
+  ColdRange claim_cold(std::size_t target, std::size_t budget) {
     const std::size_t from = touched(), capacity = this->capacity();
-    if (from >= capacity) return 0;
+    if (from >= capacity) return {};
     // The budget in elements, at most the room left: from + SIZE_MAX / sizeof(T) would wrap
     // for one-byte elements (an unbounded budget) and touch nothing.
     const std::size_t to = std::min({target, capacity, from + std::min(budget / sizeof(T), capacity - from)});
-    if (to <= from) return 0;
-    touch_pages(this->data() + from, this->data() + to);
+    if (to <= from) return {};
     warmed_ = to;
-    return (to - from) * sizeof(T);
+    return {reinterpret_cast<char*>(this->data() + from), reinterpret_cast<char*>(this->data() + to)};
   }
   /// Faults in all of the room (a resident array: growth within it never faults).
   void make_resident() { warm_to(this->capacity(), SIZE_MAX); }

@@ -54,7 +54,7 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
       throw InputError("mesh is not an oriented manifold at triangle " + std::to_string(t));
   }
   topo_.euler = topo_.live_vertices() - topo_.live_mesh_edges() + topo_.live_triangles();
-  layout_scratch_.warm(topo_, par_.threads(), SIZE_MAX);  // the first relayout's memory, at load time
+  layout_scratch_.warm(topo_, par_, SIZE_MAX);  // the first relayout's memory, at load time
 }
 
 StepConstants FastSimulator::step_constants() const {
@@ -227,7 +227,7 @@ void FastSimulator::warm_layout() {
   const std::size_t cold = layout_scratch_.cold_bytes(topo_, par_.threads());
   if (cold == 0) return;
   PassTimer t(pass_seconds_, int(Pass::Layout));
-  layout_scratch_.warm(topo_, par_.threads(), std::max(kHugePage, cold / kWarmParts));
+  layout_scratch_.warm(topo_, par_, std::max(kHugePage, cold / kWarmParts));
 }
 
 // Every Array's whole room: the topology's and the step's (reserved for 4x the input in the

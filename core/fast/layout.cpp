@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 #include "fast/layout_order.h"
 #include "fast/radix.h"
@@ -173,13 +174,16 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
 }
 }  // namespace
 
-std::size_t LayoutScratch::warm(const Topology& m, int threads, std::size_t budget) {
+std::size_t LayoutScratch::warm(const Topology& m, const Parallel& par, std::size_t budget) {
   std::size_t touched = 0;
-  for_each_room(*this, m, threads, [&](auto& a, std::size_t target, std::size_t capacity) {
+  std::vector<ColdRange> cold;
+  for_each_room(*this, m, par.threads(), [&](auto& a, std::size_t target, std::size_t capacity) {
     if (touched >= budget) return;
     if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts: not copied
-    touched += a.warm_to(target, budget - touched);
+    const ColdRange r = a.claim_cold(target, budget - touched);
+    if (r.bytes() > 0) cold.push_back(r), touched += r.bytes();
   });
+  touch_pages(par, cold);
   return touched;
 }
 

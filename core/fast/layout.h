@@ -57,9 +57,9 @@ struct LayoutScratch {
   /// memory can cost far more than streaming the same bytes (on a VM whose host backs the
   /// guest's memory lazily: docs/PERFORMANCE.md), and the spares and the orders' scratch are
   /// used only by relayouts, which would otherwise fault in all the growth since the last one in
-  /// one step. Touches at most `budget` bytes and returns how many it touched. Only between relayouts:
-  /// it may drop the scratch's contents.
-  std::size_t warm(const Topology& m, int threads, std::size_t budget);
+  /// one step. Touches at most `budget` bytes, on all of par's threads, and returns how many it
+  /// touched. Only between relayouts: it may drop the scratch's contents.
+  std::size_t warm(const Topology& m, const Parallel& par, std::size_t budget);
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
   /// Faults in all of the room: each spare at its array's capacity, each order's scratch at

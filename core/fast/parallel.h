@@ -9,8 +9,11 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <memory>
 #include <vector>
+
+#include "fast/aligned.h"
 
 // ThreadSanitizer cannot see the synchronization inside libtbb (not built with it): that a
 // parallel_for's chunks start after what the caller did before it, and end before it returns.
@@ -121,5 +124,23 @@ class Parallel {
   int threads_ = 1;
   std::unique_ptr<tbb::task_arena> arena_;
 };
+
+/// Faults in the ranges (touch_pages) on all of par's threads, a huge page at a time: a first
+/// touch is the kernel's work (zeroing the page; on a VM often the host's too) on the touching
+/// core, so two threads fault in about twice the pages in the time of one. Chunks end at
+/// huge-page boundaries, so that no two threads fault on one huge page (the second would wait).
+inline void touch_pages(const Parallel& par, const std::vector<ColdRange>& ranges) {
+  std::vector<ColdRange> chunks;
+  for (const ColdRange& r : ranges)
+    for (char* p = r.begin; p < r.end;) {
+      const std::uintptr_t boundary = (reinterpret_cast<std::uintptr_t>(p) / kHugePage + 1) * kHugePage;
+      char* const end = std::min(r.end, reinterpret_cast<char*>(boundary));
+      chunks.push_back({p, end});
+      p = end;
+    }
+  par.run(int(chunks.size()), kBlockGrain, [&](int begin, int end) {
+    for (int k = begin; k < end; ++k) touch_pages(chunks[std::size_t(k)].begin, chunks[std::size_t(k)].end);
+  });
+}
 
 }  // namespace crumple::fast

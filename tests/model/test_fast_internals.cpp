@@ -208,6 +208,47 @@ TEST(Array, TouchPagesWritesEveryPageOfTheRangeAndNothingElse) {
   }
 }
 
+// touch_pages on a Parallel (LayoutScratch::warm) cuts its ranges into chunks at huge-page
+// boundaries and touches them on any thread: every page of every range is written, nothing
+// outside the ranges. Catches a chunk cut at the wrong boundary or cut short, a range or chunk
+// that no thread touches, and a write past a range's end. Ranges that start and end inside huge
+// pages and between them, one within one page, one empty.
+TEST(Parallel, TouchPagesOnThreadsWritesEveryPageOfEveryRangeAndNothingElse) {
+  constexpr std::size_t kPage = 4096, kHuge = fast::kHugePage;
+  std::vector<unsigned char> buffer(5 * kHuge, 0xff);
+  const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(buffer.data());
+  unsigned char* huge0 = buffer.data() + ((base + kHuge - 1) / kHuge * kHuge - base);  // first boundary
+  auto range = [&](std::size_t from, std::size_t to) {
+    return fast::ColdRange{reinterpret_cast<char*>(huge0 + from), reinterpret_cast<char*>(huge0 + to)};
+  };
+  const std::vector<fast::ColdRange> ranges = {range(100, kHuge + 5000), range(kHuge + 3 * kPage, 3 * kHuge + 1),
+                                               range(3 * kHuge + 10, 3 * kHuge + 20), range(5, 5)};
+  for (int threads : {1, 2, 4}) {
+    std::fill(buffer.begin(), buffer.end(), 0xff);
+    fast::touch_pages(fast::Parallel(threads), ranges);
+    auto inside = [&](const unsigned char* p) {
+      return std::any_of(ranges.begin(), ranges.end(), [&](const fast::ColdRange& r) {
+        return p >= reinterpret_cast<unsigned char*>(r.begin) && p < reinterpret_cast<unsigned char*>(r.end);
+      });
+    };
+    for (const unsigned char* p = buffer.data(); p < buffer.data() + buffer.size(); ++p) {
+      if (!inside(p)) {
+        ASSERT_EQ(*p, 0xff) << "written outside the ranges, " << threads << " threads";
+      }
+    }
+    for (const fast::ColdRange& r : ranges) {
+      auto* begin = reinterpret_cast<unsigned char*>(r.begin);
+      auto* end = reinterpret_cast<unsigned char*>(r.end);
+      for (unsigned char* page = huge0 + (begin - huge0) / kPage * kPage; page < end; page += kPage) {
+        unsigned char* lo = std::max(page, begin);
+        unsigned char* hi = std::min(page + kPage, end);
+        if (lo >= hi) continue;  // the empty range
+        EXPECT_NE(std::find(lo, hi, 0), hi) << "page at " << page - huge0 << " not touched, " << threads << " threads";
+      }
+    }
+  }
+}
+
 // A vectorized kernel's chunks start on lane boundaries, on any thread count, and cover the
 // range once: so each item is computed by the same code path however the range is split.
 TEST(Parallel, LaneChunksStartOnLaneBoundariesAndCoverTheRangeOnce) {
@@ -802,7 +843,7 @@ TEST(Layout, RelayoutAfterWarmWritesOnlyWarmedMemory) {
   fast::LayoutScratch s;
   const fast::Parallel par(2);
   EXPECT_GT(s.cold_bytes(m, 2), 0u);
-  s.warm(m, 2, SIZE_MAX);
+  s.warm(m, par, SIZE_MAX);
   EXPECT_EQ(s.cold_bytes(m, 2), 0u);
   std::map<const void*, std::size_t> warmed;  // buffer -> elements touched
   const auto note = [&](const auto&... a) { ((warmed[a.data()] = a.touched()), ...); };
