@@ -210,7 +210,7 @@ StepEvents FastSimulator::step() {
 // A relayout's phases in consecutive steps (layout.h): a stale layout starts one, and the
 // steps after finish it before another can start.
 void FastSimulator::update_layout() {
-  if (layout_phase_ == 0 && !layout_stale(topo_, layout_fraction_)) return warm_layout();
+  if (layout_phase_ == 0 && !layout_stale(topo_, layout_fraction_)) return warm_ahead();
   PassTimer t(pass_seconds_, int(Pass::Layout));
   relayout_phase(layout_phase_, topo_, par_, layout_scratch_);
   layout_phase_ = (layout_phase_ + 1) % kLayoutPhases;
@@ -218,16 +218,26 @@ void FastSimulator::update_layout() {
   colors_.invalidate();
 }
 
-// A step between relayouts faults in a part of what the next relayout will write, so that the
-// faults of the state's growth since the last one are spread over the steps in between instead
-// of landing in one step (LayoutScratch::warm): a kWarmParts-th of what is left, and at least a
-// huge page, so that it keeps up with the growth.
-void FastSimulator::warm_layout() {
-  if (layout_fraction_ < 0) return;  // no relayout to come
-  const std::size_t cold = layout_scratch_.cold_bytes(topo_, par_.threads());
-  if (cold == 0) return;
+// A step between relayouts faults in memory that later steps will write, on all threads
+// (touch_pages), so that no step takes those first touches in a burst on one thread:
+// - the room the state's arrays grow into, as far as Array::keep_warm keeps it (an eighth of
+//   each array's capacity ahead of its elements): the step's growth, a step at a time, where
+//   keep_warm would fault in a whole eighth at once when growth reached its end;
+// - a part of what the next relayout will write, so that the faults of the state's growth since
+//   the last one are spread over the steps in between (LayoutScratch::warm): a kWarmParts-th of
+//   what is left, and at least a huge page, so that it keeps up with the growth.
+void FastSimulator::warm_ahead() {
+  std::vector<ColdRange> growth;
+  auto ahead = [&](auto& a) {
+    if (const ColdRange r = a.claim_cold(a.eighth_ahead(), SIZE_MAX); r.bytes() > 0) growth.push_back(r);
+  };
+  topo_.for_each_array(ahead);
+  step_.for_each_array(ahead);
+  const std::size_t cold = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
+  if (growth.empty() && cold == 0) return;
   PassTimer t(pass_seconds_, int(Pass::Layout));
-  layout_scratch_.warm(topo_, par_, std::max(kHugePage, cold / kWarmParts));
+  touch_pages(par_, growth);
+  if (cold > 0) layout_scratch_.warm(topo_, par_, std::max(kHugePage, cold / kWarmParts));
 }
 
 // Every Array's whole room: the topology's and the step's (reserved for 4x the input in the

@@ -142,7 +142,7 @@ class FastSimulator final : public Simulator {
   void viscous_step(const StepConstants& c);  ///< the viscosity's implicit step, no force
   StepEvents adapt();
   void update_layout();    ///< a relayout's phase when one is due (layout.h)
-  void warm_layout();      ///< part of the next relayout's memory faulted in (LayoutScratch::warm)
+  void warm_ahead();       ///< the arrays' growth room and part of the next relayout's memory faulted in
   void adapt_decide();     ///< normals on the current state, adapt_test into decisions_, the events listed
   StepEvents adapt_apply();  ///< the splits and restores of decisions_, in event order
   // The caller's manipulators (fast_manipulators.cpp).

@@ -753,6 +753,33 @@ TEST(Resident, EveryArrayKeepsItsWholeRoomFaultedIn) {
   EXPECT_EQ(cold_arrays(copy.topology()), "");
 }
 
+// A step that runs no relayout phase leaves every array of the state faulted in as far as
+// Array::keep_warm keeps it (an eighth of its room ahead of its elements): the next step's
+// growth finds its room touched, and keep_warm never faults in a whole eighth at once inside a
+// step. Catches the growth room left to keep_warm (its warmed part lags the elements' end by
+// what the step grew) and an array left out of FastSimulator::warm_ahead.
+TEST(WarmAhead, EveryStepWithoutARelayoutLeavesTheGrowthRoomTouched) {
+  // N = 128: the adjacency pools' and the edges' reserves pass a huge page, below which an array
+  // keeps all of its room faulted in anyway.
+  fast::FastSimulator sim(make_grid(128), paper_params(), 2);
+  const fast::Topology& m = sim.topology();
+  const int vertices = m.V.size();
+  int checked = 0;
+  for (int step = 0; step < 90; ++step) {
+    const std::uint64_t phases = sim.relayout_phases();
+    sim.step();
+    if (sim.relayout_phases() != phases) continue;
+    std::string lagging;
+    m.for_each_array([&](const auto& a) {
+      if (a.touched() < a.eighth_ahead()) lagging += std::to_string(a.capacity()) + ' ';
+    });
+    EXPECT_EQ(lagging, "") << "step " << step;
+    ++checked;
+  }
+  ASSERT_GT(m.V.size(), vertices + vertices / 50);  // it grew
+  ASSERT_GT(checked, 60);
+}
+
 // Grows sim without relayouts, then runs a relayout's first four phases (through the edges'
 // order) with relayouts off after them: the next step moves the edges, and no other starts.
 void stop_before_the_edges_move(fast::FastSimulator& sim) {
