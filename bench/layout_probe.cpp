@@ -5,13 +5,13 @@
 // of one round take the fractions in a rotated order, so that every fraction meets the machine's
 // load at every position. Per run: the mean frame, each pass's share of it (the passes'
 // own timers; the layout pass's includes the steps between relayouts that fault in the next
-// one's memory, LayoutScratch::warm), the frames that ran a relayout phase (a relayout's five
+// one's memory and the arrays' growth room, FastSimulator::warm_ahead), the frames that ran a relayout phase (a relayout's five
 // phases run in consecutive steps, layout.h: five frames of the paper's one step a frame) and
 // the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the
 // page faults (first touches of memory, which cost some microseconds each on a VM:
 // docs/PERFORMANCE.md) a frame and in the frames that relayout, and `warm`: the layout pass's
 // time in the frames that ran no relayout phase (the first touches of the next relayout's
-// memory), ms a frame over all the timed frames.
+// memory and of the growth room), ms a frame over all the timed frames.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
 #include <algorithm>
@@ -68,7 +68,7 @@ RunResult run(const FastSimulator& prepared, const crumple::Params& params, int 
     const double faults = minor_faults() - faults_before;
     r.faults += faults;
     const double layout = sim.pass_seconds()[int(Pass::Layout)] - layout_before;
-    if (sim.relayout_phases() > phases_before) {  // other frames' layout time is warm's (layout.h)
+    if (sim.relayout_phases() > phases_before) {  // other frames' layout time is warm_ahead's
       ++r.layout_frames, r.relayout_faults += faults;
       r.longest_layout_ms = std::max(r.longest_layout_ms, 1e3 * layout);
     } else {

@@ -7,7 +7,7 @@
 // FROM - 1 untimed and times frames FROM to TO one by one. Per run: the load (construction, and
 // make_resident), the timed frames (mean, median, 90th percentile, longest), the page faults a
 // frame, the child's peak resident set, and each pass's time a frame (the passes' own timers;
-// the layout pass holds the relayout phases and LayoutScratch::warm's first touches). The
+// the layout pass holds the relayout phases and FastSimulator::warm_ahead's first touches). The
 // summary gives each figure's medians over the rounds and the median of the rounds' ratios
 // resident / plain. The two runs of a round must end in the same state (make_resident touches
 // memory, never the model): the probe exits 1 if they do not.

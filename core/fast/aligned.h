@@ -47,9 +47,10 @@ struct AlignedAllocator {
 /// vector copy would not), so a clone of a simulator appends without reallocating, as the
 /// original does: the benchmarks time frames of clones. Part of the room ahead of the elements
 /// is kept faulted in (an eighth of the capacity: some twenty frames of a crumple's growth; all
-/// of it when it is smaller than a huge page), so that growth into it does not page-fault
-/// inside a step; the next part is touched when growth uses it up (keep_warm), one burst where
-/// there were hundreds of single faults (docs/DECISIONS.md D16).
+/// of it when it is smaller than a huge page: warm_target), so that growth into it does not
+/// page-fault inside a step. The fast backend's steps touch it ahead a step's growth at a time
+/// on all threads (claim_cold, FastSimulator::warm_ahead); keep_warm touches the next part when
+/// growth has used up what was touched (docs/DECISIONS.md D16).
 template <class T>
 class Array : public std::vector<T, AlignedAllocator<T>> {
   using Base = std::vector<T, AlignedAllocator<T>>;
@@ -85,15 +86,16 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// Elements [0, touched()) of the room are faulted in (the elements and the room warmed ahead).
   std::size_t touched() const { return std::max(this->size(), warmed_); }
   /// Faults in the room up to element `target` (at most the capacity), at most `budget` bytes
-  /// of it: memory that a later step will write, faulted in by a step with time to spare
-  /// (LayoutScratch::warm). Returns the bytes it touched.
+  /// of it: memory that a later step will write, faulted in ahead. Returns the bytes it
+  /// touched.
   std::size_t warm_to(std::size_t target, std::size_t budget) {
     const ColdRange cold = claim_cold(target, budget);
     touch_pages(cold.begin, cold.end);
     return cold.bytes();
   }
   /// The room warm_to(target, budget) would fault in, counted as faulted in from now on: the
-  /// caller touches it (LayoutScratch::warm touches many arrays' ranges on every thread).
+  /// caller touches it (LayoutScratch::warm and FastSimulator::warm_ahead touch many arrays'
+  /// ranges on every thread: touch_pages in parallel.h).
   ColdRange claim_cold(std::size_t target, std::size_t budget) {
     const std::size_t from = touched(), capacity = this->capacity();
     if (from >= capacity) return {};
@@ -114,14 +116,18 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// Where keep_warm keeps room on huge pages faulted in to: an eighth of the capacity ahead of
   /// the elements (some twenty frames of a crumple's growth).
   std::size_t eighth_ahead() const { return std::min(this->capacity(), this->size() + this->capacity() / 8); }
+  /// How far the room is kept faulted in: eighth_ahead(), or the whole room when it is smaller
+  /// than a huge page (it is on small pages, whose faults cost the most: docs/PERFORMANCE.md,
+  /// and it holds at most kHugePage bytes).
+  std::size_t warm_target() const {
+    const bool small_pages = this->capacity() * sizeof(T) < kHugePage;
+    return small_pages ? this->capacity() : eighth_ahead();
+  }
   /// Faults in the room ahead of the elements once growth has used up what was touched.
   void keep_warm() {
     const std::size_t n = this->size();
     if (n < warmed_ && warmed_ <= this->capacity()) return;
-    // Room smaller than a huge page is faulted in whole: it is on small pages, whose faults cost
-    // the most (docs/PERFORMANCE.md), and it holds at most kHugePage bytes.
-    const bool small_pages = this->capacity() * sizeof(T) < kHugePage;
-    warmed_ = small_pages ? this->capacity() : eighth_ahead();
+    warmed_ = warm_target();
     // A write a page, not a value-initialization of every element of the room: the elements are
     // initialized when growth constructs them.
     touch_pages(this->data() + n, this->data() + warmed_);

@@ -220,16 +220,16 @@ void FastSimulator::update_layout() {
 
 // A step between relayouts faults in memory that later steps will write, on all threads
 // (touch_pages), so that no step takes those first touches in a burst on one thread:
-// - the room the state's arrays grow into, as far as Array::keep_warm keeps it (an eighth of
-//   each array's capacity ahead of its elements): the step's growth, a step at a time, where
-//   keep_warm would fault in a whole eighth at once when growth reached its end;
+// - the room the state's arrays grow into, as far as Array::keep_warm keeps it (warm_target: an
+//   eighth of each array's capacity ahead of its elements): the step's growth, a step at a
+//   time, where keep_warm would fault in a whole eighth at once when growth reached its end;
 // - a part of what the next relayout will write, so that the faults of the state's growth since
 //   the last one are spread over the steps in between (LayoutScratch::warm): a kWarmParts-th of
 //   what is left, and at least a huge page, so that it keeps up with the growth.
 void FastSimulator::warm_ahead() {
   std::vector<ColdRange> growth;
   auto ahead = [&](auto& a) {
-    if (const ColdRange r = a.claim_cold(a.eighth_ahead(), SIZE_MAX); r.bytes() > 0) growth.push_back(r);
+    if (const ColdRange r = a.claim_cold(a.warm_target(), SIZE_MAX); r.bytes() > 0) growth.push_back(r);
   };
   topo_.for_each_array(ahead);
   step_.for_each_array(ahead);

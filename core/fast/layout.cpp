@@ -150,13 +150,13 @@ void LayoutScratch::reserve(std::size_t nv, std::size_t ne, std::size_t nt, int 
 namespace {
 /// Calls room(array, target, capacity) for each array of the scratch: how far the next relayout
 /// writes it (elements), and the capacity it must have by then. A spare takes its array's place
-/// at the swap, with its room, and keeps an eighth of that warm ahead of the elements; an
+/// at the swap, with its room, and keeps it warm as far as the array did (warm_target); an
 /// order's scratch holds an entry a slot of its kind, and the slots grow until the relayout
 /// about as far as the state's arrays keep warm.
 template <class S, class F>
 void for_each_room(S& s, const Topology& m, int threads, F room) {
   const auto ahead = [](const auto& a) { return a.eighth_ahead(); };
-  const auto swapped = [&](auto& spare, const auto& a) { room(spare, ahead(a), a.capacity()); };
+  const auto swapped = [&](auto& spare, const auto& a) { room(spare, a.warm_target(), a.capacity()); };
   const Vertices& V = m.V;
   swapped(s.spare_rows, V.xm), swapped(s.spare_heads, V.spring_list), swapped(s.spare_vid, V.lid);
   swapped(s.spare_springs, V.springs), swapped(s.spare_nbrs, V.nbrs);

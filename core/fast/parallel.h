@@ -127,9 +127,16 @@ class Parallel {
 
 /// Faults in the ranges (touch_pages) on all of par's threads, a huge page at a time: a first
 /// touch is the kernel's work (zeroing the page; on a VM often the host's too) on the touching
-/// core, so two threads fault in about twice the pages in the time of one. Chunks end at
-/// huge-page boundaries, so that no two threads fault on one huge page (the second would wait).
+/// core, so two threads fault in about twice the pages in the time of one. No chunk spans two
+/// huge pages, so no two threads fault on one huge page of a huge-page array (the second would
+/// wait for it). Less than a huge page in all is touched inline: not worth a parallel loop.
 inline void touch_pages(const Parallel& par, const std::vector<ColdRange>& ranges) {
+  std::size_t bytes = 0;
+  for (const ColdRange& r : ranges) bytes += r.bytes();
+  if (bytes < kHugePage) {
+    for (const ColdRange& r : ranges) touch_pages(r.begin, r.end);
+    return;
+  }
   std::vector<ColdRange> chunks;
   for (const ColdRange& r : ranges)
     for (char* p = r.begin; p < r.end;) {
