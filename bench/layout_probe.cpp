@@ -5,10 +5,10 @@
 // of one round take the fractions in a rotated order, so that every fraction meets the machine's
 // load at every position. Per run: the mean frame, each pass's share of it (the passes'
 // own timers; the layout pass's includes the steps between relayouts that fault in the next
-// one's memory and the arrays' growth room, FastSimulator::warm_ahead), the frames that ran a relayout phase (a relayout's five
-// phases run in consecutive steps, layout.h: five frames of the paper's one step a frame) and
-// the longest phase of a run, the longest frame of a run (the hitch an engine sees), and the
-// page faults (first touches of memory, which cost some microseconds each on a VM:
+// one's memory and the arrays' growth room, FastSimulator::warm_ahead), the frames that ran a
+// relayout phase (a relayout's five phases run in consecutive steps, layout.h: five frames of
+// the paper's one step a frame) and the longest phase of a run, the longest frame of a run (the
+// hitch an engine sees), and the page faults (first touches of memory, which cost some microseconds each on a VM:
 // docs/PERFORMANCE.md) a frame and in the frames that relayout, and `warm`: the layout pass's
 // time in the frames that ran no relayout phase (the first touches of the next relayout's
 // memory and of the growth room), ms a frame over all the timed frames.

@@ -234,7 +234,8 @@ TEST(Parallel, TouchPagesOnThreadsWritesEveryPageOfEveryRangeAndNothingElse) {
     fast::touch_pages(fast::Parallel(threads), ranges);
     const unsigned char* gap = buffer.data();
     for (const fast::ColdRange& r : ranges) {
-      EXPECT_FALSE(written(gap, reinterpret_cast<unsigned char*>(r.begin))) << "written before a range, " << threads << " threads";
+      EXPECT_FALSE(written(gap, reinterpret_cast<unsigned char*>(r.begin)))
+          << "written before a range, " << threads << " threads";
       gap = std::max(gap, reinterpret_cast<const unsigned char*>(r.end));
     }
     EXPECT_FALSE(written(gap, buffer.data() + buffer.size())) << "written after the ranges, " << threads << " threads";
