@@ -10,9 +10,8 @@
 // the paper's one step a frame) and the longest phase of a run, the longest frame of a run (the
 // hitch an engine sees), and the page faults (first touches of memory, which cost some
 // microseconds each on a VM: docs/PERFORMANCE.md) a frame and in the frames that relayout, and
-// `warm`: the layout pass's
-// time in the frames that ran no relayout phase (the first touches of the next relayout's
-// memory and of the growth room), ms a frame over all the timed frames.
+// `warm`: the layout pass's time in the frames that ran no relayout phase (the first touches
+// of the next relayout's memory and of the growth room), ms a frame over all the timed frames.
 // The summary gives per fraction the medians over the rounds.
 // Usage: crumple_layout_probe N THREADS FRAMES ROUNDS FRACTION [FRACTION ...]
 #include <algorithm>
