@@ -227,17 +227,18 @@ void FastSimulator::update_layout() {
 //   the last one are spread over the steps in between (LayoutScratch::warm): a kWarmParts-th of
 //   what is left, and at least a huge page, so that it keeps up with the growth.
 void FastSimulator::warm_ahead() {
-  std::vector<ColdRange> growth;
+  std::vector<ColdRange> cold;
   auto ahead = [&](auto& a) {
-    if (const ColdRange r = a.claim_cold(a.warm_target(), SIZE_MAX); r.bytes() > 0) growth.push_back(r);
+    if (const ColdRange r = a.claim_cold(a.warm_target(), SIZE_MAX); r.bytes() > 0) cold.push_back(r);
   };
   topo_.for_each_array(ahead);
   step_.for_each_array(ahead);
-  const std::size_t cold = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
-  if (growth.empty() && cold == 0) return;
+  const std::size_t next = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
+  if (cold.empty() && next == 0) return;
   PassTimer t(pass_seconds_, int(Pass::Layout));
-  touch_pages(par_, growth);
-  if (cold > 0) layout_scratch_.warm(topo_, par_, std::max(kHugePage, cold / kWarmParts));
+  // The claim may reallocate a spare (timed with the layout pass, as its touch is).
+  if (next > 0) layout_scratch_.claim_cold(topo_, par_.threads(), std::max(kHugePage, next / kWarmParts), cold);
+  touch_pages(par_, cold);  // one loop over both kinds of cold room
 }
 
 // Every Array's whole room: the topology's and the step's (reserved for 4x the input in the

@@ -175,16 +175,22 @@ void for_each_room(S& s, const Topology& m, int threads, F room) {
 }  // namespace
 
 std::size_t LayoutScratch::warm(const Topology& m, const Parallel& par, std::size_t budget) {
-  std::size_t touched = 0;
   std::vector<ColdRange> cold;
-  for_each_room(*this, m, par.threads(), [&](auto& a, std::size_t target, std::size_t capacity) {
-    if (touched >= budget) return;
-    if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts: not copied
-    const ColdRange r = a.claim_cold(target, budget - touched);
-    if (r.bytes() > 0) cold.push_back(r), touched += r.bytes();
-  });
+  const std::size_t touched = claim_cold(m, par.threads(), budget, cold);
   touch_pages(par, cold);
   return touched;
+}
+
+std::size_t LayoutScratch::claim_cold(const Topology& m, int threads, std::size_t budget,
+                                      std::vector<ColdRange>& cold) {
+  std::size_t claimed = 0;
+  for_each_room(*this, m, threads, [&](auto& a, std::size_t target, std::size_t capacity) {
+    if (claimed >= budget) return;
+    if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts: not copied
+    const ColdRange r = a.claim_cold(target, budget - claimed);
+    if (r.bytes() > 0) cold.push_back(r), claimed += r.bytes();
+  });
+  return claimed;
 }
 
 std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {

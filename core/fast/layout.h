@@ -60,6 +60,10 @@ struct LayoutScratch {
   /// one step. Touches at most `budget` bytes, on all of par's threads, and returns how many it
   /// touched. Only between relayouts: it may drop the scratch's contents.
   std::size_t warm(const Topology& m, const Parallel& par, std::size_t budget);
+  /// warm()'s bookkeeping without the touch: appends the ranges to `cold` (counted as faulted
+  /// in from now on; the caller touches them, with other arrays' in one loop:
+  /// FastSimulator::warm_ahead) and returns their bytes.
+  std::size_t claim_cold(const Topology& m, int threads, std::size_t budget, std::vector<ColdRange>& cold);
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
   /// Faults in all of the room: each spare at its array's capacity, each order's scratch at

@@ -759,20 +759,27 @@ TEST(Resident, EveryArrayKeepsItsWholeRoomFaultedIn) {
 // A step that runs no relayout phase leaves every array of the topology faulted in as far as
 // Array::keep_warm keeps it (warm_target: an eighth of its room ahead of its elements): the
 // next step's growth finds its room touched, and keep_warm never faults in a whole eighth at
-// once inside a step. Catches the growth room left to keep_warm (its warmed part lags the
-// elements' end by what the step grew) and a topology array left out of
-// FastSimulator::warm_ahead (the step scratch's arrays are not reachable from here).
+// once inside a step. The same step faults in part of what the next relayout will write: the
+// relayout scratch's cold bytes shrink. Catches the growth room left to keep_warm (its warmed
+// part lags the elements' end by what the step grew), a topology array left out of
+// FastSimulator::warm_ahead (the step scratch's arrays are not reachable from here), and
+// warm_ahead leaving the relayout's scratch out.
 TEST(WarmAhead, EveryStepWithoutARelayoutLeavesTheGrowthRoomTouched) {
   // N = 128: the adjacency pools' and the edges' reserves pass a huge page, below which an array
   // keeps all of its room faulted in anyway.
   fast::FastSimulator sim(make_grid(128), paper_params(), 2);
   const fast::Topology& m = sim.topology();
   const int vertices = m.V.size();
-  int checked = 0;
+  int checked = 0, relayout_warmed = 0;
   for (int step = 0; step < 90; ++step) {
     const std::uint64_t phases = sim.relayout_phases();
+    const std::size_t next_cold = sim.layout_scratch().cold_bytes(m, 2);
     sim.step();
     if (sim.relayout_phases() != phases) continue;
+    if (next_cold > 0) {
+      EXPECT_LT(sim.layout_scratch().cold_bytes(m, 2), next_cold) << "step " << step;
+      ++relayout_warmed;
+    }
     std::string lagging;
     m.for_each_array([&](const auto& a) {
       if (a.touched() < a.warm_target()) lagging += std::to_string(a.capacity()) + ' ';
@@ -782,6 +789,7 @@ TEST(WarmAhead, EveryStepWithoutARelayoutLeavesTheGrowthRoomTouched) {
   }
   ASSERT_GT(m.V.size(), vertices + vertices / 50);  // it grew
   ASSERT_GT(checked, 60);
+  ASSERT_GT(relayout_warmed, 2);
 }
 
 // Grows sim without relayouts, then runs a relayout's first four phases (through the edges'
