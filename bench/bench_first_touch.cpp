@@ -1,6 +1,6 @@
-// BM_FirstTouch/<pages>/<MiB>: what the machine charges for the first touch of memory (a page
-// fault: the kernel maps and zeroes a page), per 4 KiB, on 4 KiB pages ("small") and on
-// transparent huge pages ("huge", advised as the fast backend advises its large arrays,
+// BM_FirstTouch/<pages>/<MiB>[/<threads>]: what the machine charges for the first touch of
+// memory (a page fault: the kernel maps and zeroes a page), per 4 KiB, on 4 KiB pages ("small")
+// and on transparent huge pages ("huge", advised as the fast backend advises its large arrays,
 // fast/aligned.h), and on huge pages after the memory has sat free for kIdleSeconds ("idle").
 // A simulation that grows (refinement's new elements, a relayout's scratch) pays this for every
 // page it uses for the first time; on a virtual machine it can cost as much as streaming a few
@@ -8,15 +8,18 @@
 // room ahead (docs/DECISIONS.md D16).
 // Each iteration maps kTouchMiB of fresh memory with mmap (not through an allocator, which may
 // hand back memory it kept from the previous iteration, already faulted in), writes one byte a
-// 4 KiB page (the timed part), and unmaps it; one thread. The kernel hands an unmapped page
-// back at the next map, still backed, so "small" and "huge" measure recycled memory. A virtual
-// machine's kernel may report free memory to its host, which then discards it (Linux's free
-// page reporting, a 2-second delay): the next touch of such memory faults on the host too, a
-// 4 KiB at a time whatever the guest's page size, as growth into memory that has been free for
-// a while does (docs/PERFORMANCE.md, "First touches of reported memory"). "idle" waits
-// kIdleSeconds before each map, untimed; where the kernel reports nothing it measures what
-// "huge" does. Reported: us_per_4kib (the mean time a 4 KiB of first touch costs)
-// and the time per iteration (manual time).
+// 4 KiB page (the timed part), and unmaps it. One thread, or (huge and idle, the name's
+// /<threads> part) two through the fast backend's own parallel touch (touch_pages on a Parallel,
+// parallel.h), as its steps fault in their growth room: a fault is the kernel's work on the
+// faulting core, so two cores may fault memory in at up to twice the rate of one. The kernel
+// hands an unmapped page back at the next map, still backed, so "small" and "huge" measure
+// recycled memory. A virtual machine's kernel may report free memory to its host, which then
+// discards it (Linux's free page reporting, a 2-second delay): the next touch of such memory
+// faults on the host too, a 4 KiB at a time whatever the guest's page size, as growth into
+// memory that has been free for a while does (docs/PERFORMANCE.md, "First touches of reported
+// memory"). "idle" waits kIdleSeconds before each map, untimed; where the kernel reports nothing
+// it measures what "huge" does. Reported: us_per_4kib (the mean time a 4 KiB of first touch
+// costs) and the time per iteration (manual time).
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -26,6 +29,7 @@
 
 #include "bench_common.h"
 #include "fast/aligned.h"
+#include "fast/parallel.h"
 
 namespace crumple::bench {
 namespace {
@@ -57,7 +61,9 @@ Fresh map_fresh(Pages pages) {
   return {m, p};
 }
 
-void BM_FirstTouch(benchmark::State& state, Pages pages) {
+void BM_FirstTouch(benchmark::State& state, Pages pages, int threads) {
+  const fast::Parallel par(threads);
+  par.run(threads, 1, [](int, int) {});  // the arena's workers started, untimed
   double seconds = 0;
   for (auto _ : state) {
     if (pages == Pages::Idle) sleep(kIdleSeconds);  // manual time: not timed
@@ -67,7 +73,7 @@ void BM_FirstTouch(benchmark::State& state, Pages pages) {
       return;
     }
     const Clock::time_point t0 = Clock::now();
-    fast::touch_pages(fresh.p, fresh.p + kTouchBytes);
+    fast::touch_pages(par, {fast::ColdRange{fresh.p, fresh.p + kTouchBytes}});
     const double s = seconds_between(t0, Clock::now());
     state.SetIterationTime(s);
     seconds += s;
@@ -78,12 +84,19 @@ void BM_FirstTouch(benchmark::State& state, Pages pages) {
 }
 
 void register_first_touch_benchmarks() {
-  for (const auto& [label, pages] :
-       {std::pair{"small", Pages::Small}, std::pair{"huge", Pages::Huge}, std::pair{"idle", Pages::Idle}}) {
-    const std::string name = std::string("BM_FirstTouch/") + label + "/" + std::to_string(kTouchMiB);
-    auto* b = benchmark::RegisterBenchmark(name.c_str(), BM_FirstTouch, pages)->Unit(benchmark::kMillisecond)->UseManualTime();
-    if (pages == Pages::Idle) b->Iterations(kIdleIterations);
-  }
+  for (const int threads : {1, 2})
+    for (const auto& [label, pages] :
+         {std::pair{"small", Pages::Small}, std::pair{"huge", Pages::Huge}, std::pair{"idle", Pages::Idle}}) {
+      // The backend touches in parallel only arrays on huge pages (touch_pages on a Parallel).
+      if (threads > 1 && pages == Pages::Small) continue;
+      // One thread keeps the name it had before threads were a parameter (the gate compares names).
+      std::string name = std::string("BM_FirstTouch/") + label + "/" + std::to_string(kTouchMiB);
+      if (threads > 1) name += '/' + std::to_string(threads);
+      auto* b = benchmark::RegisterBenchmark(name.c_str(), BM_FirstTouch, pages, threads)
+                    ->Unit(benchmark::kMillisecond)
+                    ->UseManualTime();
+      if (pages == Pages::Idle) b->Iterations(kIdleIterations);
+    }
 }
 
 }  // namespace

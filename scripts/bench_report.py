@@ -37,7 +37,8 @@ FROZEN_FRESH = re.compile(r"^BM_FrozenFresh/(?P<backend>[^/]+)/(?P<threads>\d+)/
 STEPS = re.compile(r"^BM_Steps/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PASS = re.compile(r"^BM_Pass/(?P<pass>[^/]+)/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 STREAM = re.compile(r"^BM_Stream/(?P<kernel>[a-z]+)/(?P<threads>\d+)/(?P<mib>\d+)(?:/[a-z_]+)?$")
-FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/iterations:\d+)?(?:/[a-z_]+)?$")
+FIRST_TOUCH = re.compile(r"^BM_FirstTouch/(?P<pages>[a-z]+)/(?P<mib>\d+)(?:/(?P<threads>\d+))?"
+                         r"(?:/iterations:\d+)?(?:/[a-z_]+)?$")
 CORE_TO_CORE = re.compile(r"^BM_CoreToCore/(?P<threads>\d+)/(?P<bytes>\d+)(?:/[a-z_]+)?$")
 DEFAULT = re.compile(r"^BM_Default/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 PAIR = re.compile(r"^BM_Pair/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
@@ -288,12 +289,13 @@ FIRST_TOUCH_PAGES = [("small", "4 KiB pages"), ("huge", "huge pages"),
 
 
 def first_touch(benches):
-    """{pages: median us a 4 KiB of first touch} from BM_FirstTouch's us_per_4kib."""
+    """{(pages, threads): median us a 4 KiB of first touch} from BM_FirstTouch's us_per_4kib
+    (a name without a threads part ran on 1 thread)."""
     out = {}
     for name, b in benches.items():
         m = FIRST_TOUCH.match(name)
         if m and b.times:
-            out[m["pages"]] = b.counter("us_per_4kib")
+            out[(m["pages"], int(m["threads"] or 1))] = b.counter("us_per_4kib")
     return out
 
 
@@ -324,12 +326,17 @@ def first_touch_lines(benches, stream):
     touch = first_touch(benches)
     if not touch:
         return []
-    costs = ", ".join(f"{touch[pages]:.2f} us a 4 KiB on {label}" for pages, label in FIRST_TOUCH_PAGES if pages in touch)
+    def cost(pages, label):
+        two = f" ({touch[(pages, 2)]:.2f} us on 2 threads)" if (pages, 2) in touch else ""
+        return f"{touch[(pages, 1)]:.2f} us a 4 KiB on {label}{two}"
+
+    costs = ", ".join(cost(pages, label) for pages, label in FIRST_TOUCH_PAGES if (pages, 1) in touch)
     copy = 4096 / (roof(stream, 1) * 1e9) * 1e6  # nan without BM_Stream on 1 thread
     against = f" (the best STREAM kernel moves 4 KiB in {copy:.2f} us on 1 thread)" if math.isfinite(copy) else ""
-    return [f"First touch of fresh memory (`BM_FirstTouch`, 1 thread, a write a 4 KiB page; the kernel maps "
-            f"and zeroes each page): {costs}{against}. Growth into memory not used before pays this once a "
-            "page, which is why the fast backend faults its reserved room in ahead (docs/DECISIONS.md D16). "
+    return [f"First touch of fresh memory (`BM_FirstTouch`, 1 thread unless said, a write a 4 KiB page; the "
+            f"kernel maps and zeroes each page on the core that touches it): {costs}{against}. Growth into "
+            "memory not used before pays this once a page, which is why the fast backend faults its reserved "
+            "room in ahead, on all its threads (docs/DECISIONS.md D16). "
             "Memory that has sat free a while may cost more: a virtual machine's kernel may report free memory "
             "to its host, which discards it, and the next touch faults on the host a 4 KiB at a time.", ""]
 

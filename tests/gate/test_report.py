@@ -237,29 +237,27 @@ class FrozenFresh(unittest.TestCase):
 
 
 class FirstTouch(unittest.TestCase):
-    """BM_FirstTouch's cost a 4 KiB per kind of page, set against the 1-thread STREAM roof.
-    Wrong code this catches: the iteration time read instead of the us_per_4kib counter, the
-    kinds of page swapped or mislabelled (idle among them, whose name has an iterations part),
-    the 2-thread roof (0.22 us) instead of 1 thread's."""
+    """BM_FirstTouch's cost a 4 KiB per kind of page and thread count, set against the 1-thread
+    STREAM roof. Wrong code this catches: the iteration time read instead of the us_per_4kib
+    counter, the kinds of page swapped or mislabelled (idle among them, whose name has an
+    iterations part), a 2-thread row taken for the 1-thread one or dropped (its name has a
+    threads part before the iterations part), the 2-thread roof (0.22 us) instead of 1 thread's."""
 
     def test_cost_per_page_kind_against_streaming(self):
         b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}  # roof 14 GB/s on 1 thread
-        for pages, us in [("idle", 11.0), ("huge", 5.0), ("small", 12.0)]:
-            name = f"BM_FirstTouch/{pages}/64/manual_time"
+        for pages, threads, us in [("idle", 2, 6.0), ("idle", 1, 11.0), ("huge", 2, 2.5), ("huge", 1, 5.0),
+                                   ("small", 1, 12.0)]:
+            name = f"BM_FirstTouch/{pages}/64" + (f"/{threads}" if threads > 1 else "")
             if pages == "idle":
-                name = "BM_FirstTouch/idle/64/iterations:2/manual_time"
-            b[name] = bench(name, 99.0, us_per_4kib=us)
+                name += "/iterations:2"
+            b[name + "/manual_time"] = bench(name + "/manual_time", 99.0, us_per_4kib=us)
         text = " ".join(bench_report.roofline_section(b, {}))
-        self.assertIn("12.00 us a 4 KiB on 4 KiB pages, 5.00 us a 4 KiB on huge pages, 11.00 us a 4 KiB on huge "
-                      "pages of memory left free for 3 s first", text)
+        self.assertIn("12.00 us a 4 KiB on 4 KiB pages, 5.00 us a 4 KiB on huge pages (2.50 us on 2 threads), "
+                      "11.00 us a 4 KiB on huge pages of memory left free for 3 s first (6.00 us on 2 threads)", text)
         self.assertIn("moves 4 KiB in 0.29 us on 1 thread", text)  # 4096 B at 14 GB/s
 
     def test_no_first_touch_run_no_sentence(self):
         self.assertNotIn("First touch", " ".join(bench_report.roofline_section(benches(), {})))
-
-
-if __name__ == "__main__":
-    unittest.main()
 
 
 class LongestFrame(unittest.TestCase):
@@ -285,3 +283,7 @@ class LongestFrame(unittest.TestCase):
         b = {"BM_Frame/fast/2/128/manual_time": bench("BM_Frame/fast/2/128/manual_time", 5.0, vertices=16384)}
         lines = bench_report.budget_section(bench_report.frame_series(b), {})
         self.assertFalse(any("longest" in line for line in lines))
+
+
+if __name__ == "__main__":
+    unittest.main()
