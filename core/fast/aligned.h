@@ -108,6 +108,9 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   }
   /// Faults in all of the room (a resident array: growth within it never faults).
   void make_resident() { warm_to(this->capacity(), SIZE_MAX); }
+  /// make_resident's bookkeeping without the touch: the caller touches the range (the fast
+  /// backend touches all its arrays' ranges on every thread: FastSimulator::make_resident).
+  ColdRange claim_whole() { return claim_cold(this->capacity(), SIZE_MAX); }
   /// The bytes warm_to(target) would touch with no budget.
   std::size_t cold_bytes(std::size_t target) const {
     const std::size_t to = std::min(target, this->capacity()), from = touched();

@@ -66,10 +66,12 @@ struct LayoutScratch {
   std::size_t claim_cold(const Topology& m, int threads, std::size_t budget, std::vector<ColdRange>& cold);
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
-  /// Faults in all of the room: each spare at its array's capacity, each order's scratch at
-  /// what reserve() gave it (FastSimulator::make_resident). Keeps the contents: callable
-  /// within a relayout.
-  void make_resident(const Topology& m, int threads);
+  /// Faults in all of the room, on all of par's threads: each spare at its array's capacity,
+  /// each order's scratch at what reserve() gave it (FastSimulator::make_resident). Keeps the
+  /// contents: callable within a relayout.
+  void make_resident(const Topology& m, const Parallel& par);
+  /// make_resident's reserves and bookkeeping without the touch: appends the ranges to `cold`.
+  void claim_whole(const Topology& m, int threads, std::vector<ColdRange>& cold);
   /// Whether all the room make_resident() faults in is faulted in.
   bool resident(const Topology& m, int threads) const;
 

@@ -47,7 +47,8 @@ void append_live(It first, It last, std::vector<int>& out) {
 class TriangleStamps {
  public:
   void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
-  void make_resident() { stamp_.make_resident(); }  ///< see Simulator::make_resident
+  /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
+  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(stamp_.claim_whole()); }
   /// Starts a pass: no triangle is changed yet.
   void begin_pass() { ++pass_; }
   std::uint64_t pass() const { return pass_; }

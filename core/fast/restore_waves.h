@@ -29,7 +29,8 @@ class RestoreWaves {
  public:
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
-  void make_resident() { claim_.make_resident(); }  ///< see Simulator::make_resident
+  /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
+  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(claim_.claim_whole()); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
   /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
   /// restores applied.

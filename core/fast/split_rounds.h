@@ -24,7 +24,8 @@ class SplitRounds {
  public:
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
-  void make_resident() { tally_.make_resident(); }  ///< see Simulator::make_resident
+  /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
+  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(tally_.claim_whole()); }
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
   /// each accepted split changes in `stamps`. Returns the splits applied.
   int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
