@@ -63,7 +63,7 @@ Fresh map_fresh(Pages pages) {
 
 void BM_FirstTouch(benchmark::State& state, Pages pages, int threads) {
   const fast::Parallel par(threads);
-  par.run(threads, 1, [](int, int) {});  // the arena's workers started, untimed
+  par.run(threads, 1, [](int, int) {});  // the arena's threads created, untimed
   double seconds = 0;
   for (auto _ : state) {
     if (pages == Pages::Idle) sleep(kIdleSeconds);  // manual time: not timed

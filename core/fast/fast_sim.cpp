@@ -224,8 +224,8 @@ void FastSimulator::update_layout() {
 //   eighth of each array's capacity ahead of its elements): the step's growth, a step at a
 //   time, where keep_warm would fault in a whole eighth at once when growth reached its end;
 // - a part of what the next relayout will write, so that the faults of the state's growth since
-//   the last one are spread over the steps in between (LayoutScratch::warm): a kWarmParts-th of
-//   what is left, and at least a huge page, so that it keeps up with the growth.
+//   the last one are spread over the steps in between (LayoutScratch::claim_cold): a
+//   kWarmParts-th of what is left, and at least a huge page, so that it keeps up with the growth.
 void FastSimulator::warm_ahead() {
   std::vector<ColdRange> cold;
   auto ahead = [&](auto& a) {

@@ -67,10 +67,11 @@ struct LayoutScratch {
   /// The bytes warm() would touch with no budget.
   std::size_t cold_bytes(const Topology& m, int threads) const;
   /// Faults in all of the room, on all of par's threads: each spare at its array's capacity,
-  /// each order's scratch at what reserve() gave it (FastSimulator::make_resident). Keeps the
-  /// contents: callable within a relayout.
+  /// each order's scratch at what reserve() gave it. Keeps the contents: callable within a
+  /// relayout.
   void make_resident(const Topology& m, const Parallel& par);
-  /// make_resident's reserves and bookkeeping without the touch: appends the ranges to `cold`.
+  /// make_resident's reserves and bookkeeping without the touch: appends the ranges to `cold`
+  /// (FastSimulator::make_resident touches them with the state's in one loop).
   void claim_whole(const Topology& m, int threads, std::vector<ColdRange>& cold);
   /// Whether all the room make_resident() faults in is faulted in.
   bool resident(const Topology& m, int threads) const;

@@ -236,7 +236,7 @@ class Topology {
   void unlist_tri(int v, int entry);  ///< erases `entry` from v's triangle list, keeping the order
 
   /// Calls f(array) for each of the arrays that grow with the mesh: every kind of slot's
-  /// attributes, the pools and the split records (FastSimulator::make_resident).
+  /// attributes, the pools and the split records (FastSimulator::make_resident, warm_ahead).
   template <class F>
   void for_each_array(F&& f) { each_array(*this, f); }
   template <class F>
