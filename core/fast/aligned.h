@@ -103,8 +103,20 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     // for one-byte elements (an unbounded budget) and touch nothing.
     const std::size_t to = std::min({target, capacity, from + std::min(budget / sizeof(T), capacity - from)});
     if (to <= from) return {};
-    warmed_ = to;
-    return {reinterpret_cast<char*>(this->data() + from), reinterpret_cast<char*>(this->data() + to)};
+    warmed_ = huge_page_end(to);
+    return {reinterpret_cast<char*>(this->data() + from), reinterpret_cast<char*>(this->data() + warmed_)};
+  }
+  /// Where a claim ending at element `to` ends on huge pages: the first touch of a huge page
+  /// maps all of it, so a claim runs on to the last element that ends within the huge page of
+  /// its last byte (at most the capacity, never into the next huge page). The bytes a claim
+  /// returns are then the bytes its touch faults in, and a budget bounds the faults (a budget
+  /// of small claims spread over many arrays would otherwise map a huge page for each). A room
+  /// under a huge page (on 4 KiB pages: allocate_aligned) ends where it ended.
+  std::size_t huge_page_end(std::size_t to) const {
+    if (this->capacity() * sizeof(T) < kHugePage) return to;
+    const std::uintptr_t base = reinterpret_cast<std::uintptr_t>(this->data());
+    const std::uintptr_t boundary = ((base + to * sizeof(T) - 1) / kHugePage + 1) * kHugePage;
+    return std::min(this->capacity(), std::size_t(boundary - base) / sizeof(T));
   }
   /// Faults in all of the room (a resident array: growth within it never faults).
   void make_resident() { warm_to(this->capacity(), SIZE_MAX); }
@@ -140,6 +152,28 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   std::size_t warmed_ = 0;  ///< elements [size, warmed_) of the room are faulted in
   Array(Array&&) noexcept = default;
   Array& operator=(Array&&) noexcept = default;
+};
+
+/// Claims of cold room from arrays in turn within a budget of bytes (the claims' bytes: on huge
+/// pages the bytes their touch faults in, Array::huge_page_end), collected for one touch_pages
+/// loop. Once the budget is spent the next arrays claim nothing: they get their turn at a later
+/// call, so a budget spreads a large claim over calls instead of faulting it in at once.
+class ColdClaims {
+ public:
+  explicit ColdClaims(std::vector<ColdRange>& ranges, std::size_t budget = SIZE_MAX)
+      : ranges_(ranges), budget_(budget) {}
+  /// Claims a's room up to element `target` within what is left of the budget.
+  template <class A>
+  void claim(A& a, std::size_t target) {
+    if (claimed_ >= budget_) return;
+    const ColdRange r = a.claim_cold(target, budget_ - claimed_);
+    if (r.bytes() > 0) ranges_.push_back(r), claimed_ += r.bytes();
+  }
+  std::size_t claimed() const { return claimed_; }
+
+ private:
+  std::vector<ColdRange>& ranges_;
+  std::size_t budget_, claimed_ = 0;
 };
 
 /// Resizes scratch (a std::vector or an Array whose content the caller rewrites) to n elements,

@@ -224,17 +224,22 @@ void FastSimulator::update_layout() {
 //   eighth of each array's capacity ahead of its elements): the step's growth, a step at a
 //   time, where keep_warm would fault in a whole eighth at once when growth reached its end;
 // - a part of what the next relayout will write, so that the faults of the state's growth since
-//   the last one are spread over the steps in between (LayoutScratch::claim_cold): a
-//   kWarmParts-th of what is left, and at least a huge page, so that it keeps up with the growth.
+//   the last one are spread over the steps in between (LayoutScratch::claim_cold).
+// Each kind claims a kWarmParts-th of what is left of it, and at least a huge page, so that it
+// keeps up with the growth: the growth room lags most after a relayout, whose phases' steps
+// claim none of it (a step's growth is far less than the eighth ahead).
 void FastSimulator::warm_ahead() {
+  std::size_t growth = 0;  // the growth room's cold bytes
+  auto count = [&](const auto& a) { growth += a.cold_bytes(a.warm_target()); };
+  topo_.for_each_array(count);
+  step_.for_each_array(count);
+  const std::size_t next = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
+  if (growth == 0 && next == 0) return;
   std::vector<ColdRange> cold;
-  auto ahead = [&](auto& a) {
-    if (const ColdRange r = a.claim_cold(a.warm_target(), SIZE_MAX); r.bytes() > 0) cold.push_back(r);
-  };
+  ColdClaims claims(cold, std::max(kHugePage, growth / kWarmParts));
+  auto ahead = [&](auto& a) { claims.claim(a, a.warm_target()); };
   topo_.for_each_array(ahead);
   step_.for_each_array(ahead);
-  const std::size_t next = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
-  if (cold.empty() && next == 0) return;
   PassTimer t(pass_seconds_, int(Pass::Layout));
   // The claim may reallocate a spare (timed with the layout pass, as its touch is).
   if (next > 0) layout_scratch_.claim_cold(topo_, par_.threads(), std::max(kHugePage, next / kWarmParts), cold);

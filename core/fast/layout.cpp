@@ -183,14 +183,13 @@ std::size_t LayoutScratch::warm(const Topology& m, const Parallel& par, std::siz
 
 std::size_t LayoutScratch::claim_cold(const Topology& m, int threads, std::size_t budget,
                                       std::vector<ColdRange>& cold) {
-  std::size_t claimed = 0;
+  ColdClaims claims(cold, budget);
   for_each_room(*this, m, threads, [&](auto& a, std::size_t target, std::size_t capacity) {
-    if (claimed >= budget) return;
+    if (claims.claimed() >= budget) return;
     if (a.capacity() < capacity) a.clear(), a.reserve(capacity);  // dead between relayouts: not copied
-    const ColdRange r = a.claim_cold(target, budget - claimed);
-    if (r.bytes() > 0) cold.push_back(r), claimed += r.bytes();
+    claims.claim(a, target);
   });
-  return claimed;
+  return claims.claimed();
 }
 
 std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {

@@ -91,7 +91,8 @@ struct LayoutScratch {
 inline constexpr int kLayoutPhases = 5;
 
 /// A step between relayouts faults in this part (1 / kWarmParts) of the memory the next
-/// relayout will write that is not faulted in yet (LayoutScratch::warm; FastSimulator).
+/// relayout will write that is not faulted in yet, and of the arrays' growth room
+/// (LayoutScratch::warm; FastSimulator::warm_ahead).
 inline constexpr std::size_t kWarmParts = 4;
 
 /// Runs phase `phase` (0 to kLayoutPhases - 1) of a relayout; phase 0 resets the vertices'

@@ -129,14 +129,10 @@ class Parallel {
 /// touch is the kernel's work (zeroing the page; on a VM often the host's too) on the touching
 /// core, so two threads fault in about twice the pages in the time of one. No chunk spans two
 /// huge pages, so no two threads fault on one huge page of a huge-page array (the second would
-/// wait for it). Less than a huge page in all is touched inline: not worth a parallel loop.
+/// wait for it). Ranges within one huge page are touched inline: not worth a parallel loop. (A
+/// few bytes in each of several huge pages are worth one: each first touch maps a whole huge
+/// page.)
 inline void touch_pages(const Parallel& par, const std::vector<ColdRange>& ranges) {
-  std::size_t bytes = 0;
-  for (const ColdRange& r : ranges) bytes += r.bytes();
-  if (bytes < kHugePage) {
-    for (const ColdRange& r : ranges) touch_pages(r.begin, r.end);
-    return;
-  }
   std::vector<ColdRange> chunks;
   for (const ColdRange& r : ranges)
     for (char* p = r.begin; p < r.end;) {
@@ -145,6 +141,10 @@ inline void touch_pages(const Parallel& par, const std::vector<ColdRange>& range
       chunks.push_back({p, end});
       p = end;
     }
+  if (chunks.size() < 2) {
+    for (const ColdRange& c : chunks) touch_pages(c.begin, c.end);
+    return;
+  }
   par.run(int(chunks.size()), kBlockGrain, [&](int begin, int end) {
     for (int k = begin; k < end; ++k) touch_pages(chunks[std::size_t(k)].begin, chunks[std::size_t(k)].end);
   });
