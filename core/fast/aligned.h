@@ -48,9 +48,9 @@ struct AlignedAllocator {
 /// original does: the benchmarks time frames of clones. Part of the room ahead of the elements
 /// is kept faulted in (an eighth of the capacity: some twenty frames of a crumple's growth; all
 /// of it when it is smaller than a huge page: warm_target), so that growth into it does not
-/// page-fault inside a step. The fast backend's steps touch it ahead a step's growth at a time
-/// on all threads (claim_cold, FastSimulator::warm_ahead); keep_warm touches the next part when
-/// growth has used up what was touched (docs/DECISIONS.md D16).
+/// page-fault inside a step. The fast backend's steps touch it ahead on all threads, within a
+/// budget (claim_cold, FastSimulator::warm_ahead); keep_warm touches the next part when growth
+/// has used up what was touched (docs/DECISIONS.md D16).
 template <class T>
 class Array : public std::vector<T, AlignedAllocator<T>> {
   using Base = std::vector<T, AlignedAllocator<T>>;
@@ -86,8 +86,8 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// Elements [0, touched()) of the room are faulted in (the elements and the room warmed ahead).
   std::size_t touched() const { return std::max(this->size(), warmed_); }
   /// Faults in the room up to element `target` (at most the capacity), at most `budget` bytes
-  /// of it: memory that a later step will write, faulted in ahead. Returns the bytes it
-  /// touched.
+  /// of it, and on huge pages on to the end of the huge page it ends in (huge_page_end): memory
+  /// that a later step will write, faulted in ahead. Returns the bytes it touched.
   std::size_t warm_to(std::size_t target, std::size_t budget) {
     const ColdRange cold = claim_cold(target, budget);
     touch_pages(cold.begin, cold.end);
@@ -123,7 +123,8 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// make_resident's bookkeeping without the touch: the caller touches the range (the fast
   /// backend touches all its arrays' ranges on every thread: FastSimulator::make_resident).
   ColdRange claim_whole() { return claim_cold(this->capacity(), SIZE_MAX); }
-  /// The bytes warm_to(target) would touch with no budget.
+  /// The bytes short of `target` (warm_to(target) touches them, and on huge pages up to the
+  /// end of the last one).
   std::size_t cold_bytes(std::size_t target) const {
     const std::size_t to = std::min(target, this->capacity()), from = touched();
     return to > from ? (to - from) * sizeof(T) : 0;
@@ -131,6 +132,10 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   /// Where keep_warm keeps room on huge pages faulted in to: an eighth of the capacity ahead of
   /// the elements (some twenty frames of a crumple's growth).
   std::size_t eighth_ahead() const { return std::min(this->capacity(), this->size() + this->capacity() / 8); }
+  /// The room a budgeted fault-in claims first, whatever its budget (FastSimulator::warm_ahead):
+  /// a sixteenth of the capacity ahead of the elements, half of what warm_target keeps, so that
+  /// growth never reaches cold room while the budget catches up.
+  std::size_t warm_floor() const { return std::min(warm_target(), this->size() + this->capacity() / 16); }
   /// How far the room is kept faulted in: eighth_ahead(), or the whole room when it is smaller
   /// than a huge page (it is on small pages, whose faults cost the most: docs/PERFORMANCE.md,
   /// and it holds at most kHugePage bytes).

@@ -221,13 +221,15 @@ void FastSimulator::update_layout() {
 // A step between relayouts faults in memory that later steps will write, on all threads
 // (touch_pages), so that no step takes those first touches in a burst on one thread:
 // - the room the state's arrays grow into, as far as Array::keep_warm keeps it (warm_target: an
-//   eighth of each array's capacity ahead of its elements): the step's growth, a step at a
-//   time, where keep_warm would fault in a whole eighth at once when growth reached its end;
+//   eighth of each array's capacity ahead of its elements), where keep_warm would fault in a
+//   whole eighth at once when growth reached its end;
 // - a part of what the next relayout will write, so that the faults of the state's growth since
 //   the last one are spread over the steps in between (LayoutScratch::claim_cold).
-// Each kind claims a kWarmParts-th of what is left of it, and at least a huge page, so that it
-// keeps up with the growth: the growth room lags most after a relayout, whose phases' steps
-// claim none of it (a step's growth is far less than the eighth ahead).
+// Each kind claims a kWarmParts-th of what is left of it, and at least a huge page: the growth
+// room lags most after a relayout, whose phases' steps claim none of it, and the budget spreads
+// that lag over the next steps. The budget goes to the arrays in a fixed order, so where a
+// step's growth exceeds it the last arrays would lag for good: each array's warm_floor (half
+// the eighth) is claimed first, whatever the budget.
 void FastSimulator::warm_ahead() {
   std::size_t growth = 0;  // the growth room's cold bytes
   auto count = [&](const auto& a) { growth += a.cold_bytes(a.warm_target()); };
@@ -236,8 +238,11 @@ void FastSimulator::warm_ahead() {
   const std::size_t next = layout_fraction_ < 0 ? 0 : layout_scratch_.cold_bytes(topo_, par_.threads());
   if (growth == 0 && next == 0) return;
   std::vector<ColdRange> cold;
-  ColdClaims claims(cold, std::max(kHugePage, growth / kWarmParts));
-  auto ahead = [&](auto& a) { claims.claim(a, a.warm_target()); };
+  ColdClaims needed(cold), budgeted(cold, std::max(kHugePage, growth / kWarmParts));
+  auto soon = [&](auto& a) { needed.claim(a, a.warm_floor()); };
+  auto ahead = [&](auto& a) { budgeted.claim(a, a.warm_target()); };
+  topo_.for_each_array(soon);
+  step_.for_each_array(soon);
   topo_.for_each_array(ahead);
   step_.for_each_array(ahead);
   PassTimer t(pass_seconds_, int(Pass::Layout));

@@ -57,14 +57,15 @@ struct LayoutScratch {
   /// memory can cost far more than streaming the same bytes (on a VM whose host backs the
   /// guest's memory lazily: docs/PERFORMANCE.md), and the spares and the orders' scratch are
   /// used only by relayouts, which would otherwise fault in all the growth since the last one in
-  /// one step. Touches at most `budget` bytes, on all of par's threads, and returns how many it
+  /// one step. Touches `budget` bytes or a little more (a claim on huge pages runs on to its
+  /// huge page's end: Array::huge_page_end), on all of par's threads, and returns how many it
   /// touched. Only between relayouts: it may drop the scratch's contents.
   std::size_t warm(const Topology& m, const Parallel& par, std::size_t budget);
   /// warm()'s bookkeeping without the touch: appends the ranges to `cold` (counted as faulted
   /// in from now on; the caller touches them, with other arrays' in one loop:
   /// FastSimulator::warm_ahead) and returns their bytes.
   std::size_t claim_cold(const Topology& m, int threads, std::size_t budget, std::vector<ColdRange>& cold);
-  /// The bytes warm() would touch with no budget.
+  /// The bytes short of the targets that warm() touches towards.
   std::size_t cold_bytes(const Topology& m, int threads) const;
   /// Faults in all of the room, on all of par's threads: each spare at its array's capacity,
   /// each order's scratch at what reserve() gave it. Keeps the contents: callable within a
