@@ -120,9 +120,6 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
   }
   /// Faults in all of the room (a resident array: growth within it never faults).
   void make_resident() { warm_to(this->capacity(), SIZE_MAX); }
-  /// make_resident's bookkeeping without the touch: the caller touches the range (the fast
-  /// backend touches all its arrays' ranges on every thread: FastSimulator::make_resident).
-  ColdRange claim_whole() { return claim_cold(this->capacity(), SIZE_MAX); }
   /// The bytes short of `target` (warm_to(target) touches them, and on huge pages up to the
   /// end of the last one).
   std::size_t cold_bytes(std::size_t target) const {
@@ -174,6 +171,10 @@ class ColdClaims {
     const ColdRange r = a.claim_cold(target, budget_ - claimed_);
     if (r.bytes() > 0) ranges_.push_back(r), claimed_ += r.bytes();
   }
+  /// Claims all of a's room: make_resident's bookkeeping without the touch (the fast backend
+  /// touches all its arrays' ranges on every thread: FastSimulator::make_resident).
+  template <class A>
+  void whole(A& a) { claim(a, a.capacity()); }
   std::size_t claimed() const { return claimed_; }
 
  private:

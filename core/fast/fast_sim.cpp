@@ -259,15 +259,16 @@ void FastSimulator::warm_ahead() {
 // the touching core.
 void FastSimulator::make_resident() {
   std::vector<ColdRange> cold;
-  auto whole = [&](auto& a) { cold.push_back(a.claim_whole()); };
+  ColdClaims claims(cold);
+  auto whole = [&](auto& a) { claims.whole(a); };
   topo_.for_each_array(whole);
   step_.for_each_array(whole);
   whole(decisions_);
   whole(vertex_stamp_);
-  stamps_.claim_whole(cold);
-  rounds_.claim_whole(cold);
-  waves_.claim_whole(cold);
-  layout_scratch_.claim_whole(topo_, par_.threads(), cold);
+  stamps_.claim_whole(claims);
+  rounds_.claim_whole(claims);
+  waves_.claim_whole(claims);
+  layout_scratch_.claim_whole(topo_, par_.threads(), claims);
   touch_pages(par_, cold);
 }
 

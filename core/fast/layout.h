@@ -71,9 +71,9 @@ struct LayoutScratch {
   /// each order's scratch at what reserve() gave it. Keeps the contents: callable within a
   /// relayout.
   void make_resident(const Topology& m, const Parallel& par);
-  /// make_resident's reserves and bookkeeping without the touch: appends the ranges to `cold`
+  /// make_resident's reserves and bookkeeping without the touch: adds the ranges to `claims`
   /// (FastSimulator::make_resident touches them with the state's in one loop).
-  void claim_whole(const Topology& m, int threads, std::vector<ColdRange>& cold);
+  void claim_whole(const Topology& m, int threads, ColdClaims& claims);
   /// Whether all the room make_resident() faults in is faulted in.
   bool resident(const Topology& m, int threads) const;
 

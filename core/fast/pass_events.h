@@ -48,7 +48,7 @@ class TriangleStamps {
  public:
   void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
-  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(stamp_.claim_whole()); }
+  void claim_whole(ColdClaims& claims) { claims.whole(stamp_); }
   /// Starts a pass: no triangle is changed yet.
   void begin_pass() { ++pass_; }
   std::uint64_t pass() const { return pass_; }

@@ -30,7 +30,7 @@ class RestoreWaves {
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
-  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(claim_.claim_whole()); }
+  void claim_whole(ColdClaims& claims) { claims.whole(claim_); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
   /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
   /// restores applied.

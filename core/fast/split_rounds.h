@@ -25,7 +25,7 @@ class SplitRounds {
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
-  void claim_whole(std::vector<ColdRange>& cold) { cold.push_back(tally_.claim_whole()); }
+  void claim_whole(ColdClaims& claims) { claims.whole(tally_); }
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
   /// each accepted split changes in `stamps`. Returns the splits applied.
   int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
