@@ -273,14 +273,35 @@ def chart_passes(passes, machine, path):
     return True
 
 
-def stream_bandwidth(benches):
-    """{threads: {kernel: median GB/s}} from BM_Stream's bytes_per_second."""
+def stream_bandwidth(benches, spread=False):
+    """{threads: {kernel: median GB/s}} from BM_Stream's bytes_per_second; with spread, the
+    lowest and highest repetition's instead: {threads: {kernel: (lowest, highest)}}."""
     out = {}
     for name, b in benches.items():
         m = STREAM.match(name)
-        if m and b.times:
-            out.setdefault(int(m["threads"]), {})[m["kernel"]] = b.counter("bytes_per_second") / 1e9
+        vals = b.values("bytes_per_second") if m and b.times else []
+        if vals:
+            value = (min(vals) / 1e9, max(vals) / 1e9) if spread else statistics.median(vals) / 1e9
+            out.setdefault(int(m["threads"]), {})[m["kernel"]] = value
     return out
+
+
+def stream_table(benches, stream):
+    """The STREAM table: each kernel's median GB/s and, where it has several repetitions, their
+    range. A machine whose bandwidth changes during the run (a VM's host: docs/PERFORMANCE.md)
+    shows it there, and the roof, a median, may then come from its faster minutes."""
+    spread = stream_bandwidth(benches, spread=True)
+    kernels = sorted({k for per_t in stream.values() for k in per_t})
+    lines = ["| threads | " + " | ".join(f"{k} GB/s" for k in kernels) + " |", "|---:|" + "---:|" * len(kernels)]
+    for threads in sorted(stream):
+        cells = []
+        for k in kernels:
+            median = stream[threads].get(k, float("nan"))
+            lo, hi = spread.get(threads, {}).get(k, (median, median))
+            cells.append(f"{median:.1f}" + (f" ({lo:.1f}-{hi:.1f})" if f"{lo:.1f}" != f"{hi:.1f}" else ""))
+        lines.append(f"| {threads} | " + " | ".join(cells) + " |")
+    ranged = any("(" in line for line in lines[2:])
+    return lines + [""] + (["In brackets: the lowest and highest repetition.", ""] if ranged else [])
 
 
 # BM_FirstTouch's kinds of page, in the report's order, and how the report names each.
@@ -427,12 +448,7 @@ def roofline_section(benches, charts):
              "same thread count: a pass near it is memory-bound at its layout's traffic, one far below it is bound "
              "by something else (latency of scattered reads, compute, serial work).", ""]
     if stream:
-        kernels = sorted({k for per_t in stream.values() for k in per_t})
-        lines += ["| threads | " + " | ".join(f"{k} GB/s" for k in kernels) + " |",
-                  "|---:|" + "---:|" * len(kernels)]
-        for threads in sorted(stream):
-            lines.append(f"| {threads} | " + " | ".join(f"{stream[threads].get(k, float('nan')):.1f}" for k in kernels) + " |")
-        lines.append("")
+        lines += stream_table(benches, stream)
     lines += first_touch_lines(benches, stream)
     lines += core_to_core_lines(benches)
     if "roofline.png" in charts:

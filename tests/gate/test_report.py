@@ -60,6 +60,30 @@ class Rooflines(unittest.TestCase):
         self.assertTrue(all(r.endswith("| - | - | - |") for r in rows), rows)
 
 
+class StreamSpread(unittest.TestCase):
+    """The STREAM table gives each kernel's median and the range of its repetitions, which shows a
+    machine whose bandwidth changed during the run. Wrong code this catches: the range taken from
+    another kernel or thread count, the times' range instead of the bandwidth's, the median of
+    the range's ends instead of the repetitions', a range printed for a single repetition."""
+
+    def test_median_and_range_of_each_kernel(self):
+        b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}
+        spread = b["BM_Stream/read/2/128"]
+        spread.times = [10.0, 12.0, 9.0, 20.0, 11.0]
+        spread.counters["bytes_per_second"] = [31e9, 34e9, 35e9, 53e9, 60e9]
+        lines = bench_report.stream_table(b, bench_report.stream_bandwidth(b))
+        rows = {line.split("|")[1].strip(): line for line in lines if line.startswith("| 1 ") or line.startswith("| 2 ")}
+        self.assertEqual(lines[0], "| threads | gather GB/s | read GB/s | triad GB/s |")
+        self.assertEqual(rows["1"], "| 1 | 16.0 | 9.0 | 14.0 |")
+        self.assertEqual(rows["2"], "| 2 | 8.0 | 35.0 (31.0-60.0) | 19.0 |")
+        self.assertIn("In brackets: the lowest and highest repetition.", lines)
+
+    def test_no_range_no_note(self):
+        b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}
+        lines = bench_report.stream_table(b, bench_report.stream_bandwidth(b))
+        self.assertFalse(any("(" in line or "brackets" in line for line in lines), lines)
+
+
 class MachineLoad(unittest.TestCase):
     """The busy verdict reads the load before bench.sh's own build when run.json has it. Wrong
     code this catches: the verdict taken from the load at the benchmark's start (which the build
