@@ -38,6 +38,9 @@ source "$root/scripts/bench_build.sh"
 # is read after the two builds, whose compilers still weigh in the 1-minute average.
 read -r load1 load5 load15 _ < /proc/loadavg
 bench_setup
+# What competes for the CPUs now (the load average still carries work that ended a minute ago):
+# the busy and stolen shares of all CPUs' time over a few seconds, after the set-up's installs.
+cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3)
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
 build_bench "$build" crumple_bench
 bin=$build/bench/crumple_bench
@@ -100,9 +103,9 @@ elapsed=$(($(date +%s) - start))
 
 "$py" "$root/scripts/machine_info.py" --json > "$dest/machine.json"
 "$py" - "$dest/run.json" "$dest/machine.json" "$elapsed" "$quick" "$reps" "$min_time" "$filter" \
-      "$rev" "${main_cmd[*]}" "$load1 $load5 $load15" <<'PY'
+      "$rev" "${main_cmd[*]}" "$load1 $load5 $load15" "$cpu_use" <<'PY'
 import json, sys, datetime
-out, machine, elapsed, quick, reps, min_time, flt, rev, cmd, load = sys.argv[1:]
+out, machine, elapsed, quick, reps, min_time, flt, rev, cmd, load, cpu_use = sys.argv[1:]
 with open(machine) as f:
     m = json.load(f)
 json.dump({"machine": m, "mode": "quick" if quick == "1" else "full",
@@ -110,6 +113,7 @@ json.dump({"machine": m, "mode": "quick" if quick == "1" else "full",
            "benchmark_command": cmd, "repetitions": int(reps), "min_time": float(min_time),
            "filter": flt, "random_interleaving": True, "git": rev, "seconds": int(elapsed),
            "load_before_build": [float(x) for x in load.split()],
+           "cpu_use_before_build": json.loads(cpu_use or "{}"),
            "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds")},
           open(out, "w"), indent=2)
 PY

@@ -707,6 +707,43 @@ def cpu_line(m, context):
             f"{caches}; {context.get('mhz_per_cpu', '?')} MHz")
 
 
+# A sample of the CPUs' time before the build says the machine is busy above this busy share
+# (on 2 CPUs, half a core's worth of other work), and names the hypervisor's steal above this.
+BUSY_SHARE, STEAL_SHARE = 0.25, 0.05
+
+
+def load_lines(run, context, cpus):
+    """The machine's load before the run, and the verdict whether other work competed with it.
+    The load at the benchmark's start includes bench.sh's own build just before it; the load
+    average before that build (run.json's load_before_build) still carries work that ended up to
+    a minute before; the CPUs' busy share sampled over a few seconds after it
+    (cpu_use_before_build, from /proc/stat) tells what competes now, and decides where present."""
+    lines = []
+    before = run.get("load_before_build", [])
+    load = before or context.get("load_avg", [])
+    use = run.get("cpu_use_before_build") or {}
+    if before:
+        lines.append(f"- Load average before bench.sh built the harness {fmt_load(before)} "
+                     "(the one at start above includes that build)")
+    why = ""
+    if "busy" in use:
+        lines.append(f"- CPU time before the build, over {use.get('seconds', 0):g} s (/proc/stat): "
+                     f"{100 * use['busy']:.0f} % of all CPUs' time busy, {100 * use.get('steal', 0):.0f} % "
+                     "stolen by the hypervisor")
+        if use["busy"] > BUSY_SHARE:
+            why = f"{100 * use['busy']:.0f} % of the {cpus} CPUs' time was busy just before the run's build"
+    elif load and load[0] > 0.5 * cpus:
+        when = "before the run's build" if before else "when the run started"
+        why = f"load average {load[0]:.2f} on {cpus} CPUs {when}"
+    if why:
+        lines.append(f"- **The machine was busy**: {why}, "
+                     "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
+    if use.get("steal", 0) > STEAL_SHARE:
+        lines.append(f"- **The hypervisor took {100 * use['steal']:.0f} % of the CPUs' time** before the run "
+                     "(steal): the host's other guests competed for the cores")
+    return lines
+
+
 def machine_section(run, context):
     """The report's machine section: CPU, SIMD, compiler, load, caveats."""
     m = run.get("machine", {})
@@ -719,18 +756,7 @@ def machine_section(run, context):
                  f"build {context.get('crumple_build_type', '?')}, flags `{context.get('crumple_cxx_flags', '?')}`")
     lines.append(f"- Backends built: {context.get('crumple_backends', '?')}; kernel {m.get('kernel', '?')}; "
                  f"load average at start {fmt_load(context.get('load_avg', []))}")
-    # The load at the benchmark's start includes bench.sh's own build just before it; the
-    # load before that build (run.json's load_before_build) is the one that tells of neighbours.
-    before = run.get("load_before_build", [])
-    load = before or context.get("load_avg", [])
-    cpus = context.get("num_cpus") or m.get("cpus") or 1
-    if before:
-        lines.append(f"- Load average before bench.sh built the harness {fmt_load(before)} "
-                     "(the one at start above includes that build)")
-    if load and load[0] > 0.5 * cpus:
-        when = "before the run's build" if before else "when the run started"
-        lines.append(f"- **The machine was busy**: load average {load[0]:.2f} on {cpus} CPUs {when}, "
-                     "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
+    lines += load_lines(run, context, context.get("num_cpus") or m.get("cpus") or 1)
     if run.get("mode") == "quick":
         lines.append("- **Quick mode** (`--quick`): N <= 256 and few, short repetitions; a smoke test of the harness, "
                      "not numbers to publish")

@@ -7,6 +7,10 @@
                             does, and the widest SIMD set)
   machine_info.py --json    prints a JSON object: model, tag, cores, threads_per_core, simd,
                             flags (a summary), compiler, kernel
+  machine_info.py --cpu-use SECONDS
+                            prints a JSON object: the share of all CPUs' time that was busy,
+                            and the share the hypervisor stole, over the next SECONDS (from
+                            /proc/stat; empty where it cannot be read)
 """
 import json
 import os
@@ -14,6 +18,7 @@ import platform
 import re
 import subprocess
 import sys
+import time
 
 
 def lscpu():
@@ -161,11 +166,50 @@ def describe():
     }
 
 
+def cpu_times(stat_text):
+    """The aggregate "cpu" line of /proc/stat as (busy, idle, steal) jiffies: busy is user, nice,
+    system, irq and softirq; idle is idle and iowait (guest time is counted in user already)."""
+    for line in stat_text.splitlines():
+        fields = line.split()
+        if fields and fields[0] == "cpu":
+            v = [int(x) for x in fields[1:9]]
+            user, nice, system, idle, iowait, irq, softirq, steal = v + [0] * (8 - len(v))  # old kernels: no steal
+            return user + nice + system + irq + softirq, idle + iowait, steal
+    return None
+
+
+def cpu_use(before, after, seconds):
+    """{seconds, busy, steal}: the shares of all CPUs' time between two cpu_times readings that
+    were busy and that the hypervisor stole. Unlike the 1-minute load average, which still carries
+    work that ended a minute before, it tells what competes for the CPUs now."""
+    if not before or not after:
+        return {}
+    busy, idle, steal = (a - b for a, b in zip(after, before))
+    total = busy + idle + steal
+    if total <= 0:
+        return {}
+    return {"seconds": seconds, "busy": round(busy / total, 4), "steal": round(steal / total, 4)}
+
+
+def sample_cpu_use(seconds):
+    def read():
+        try:
+            with open("/proc/stat") as f:
+                return cpu_times(f.read())
+        except OSError:
+            return None
+    before = read()
+    time.sleep(seconds)
+    return cpu_use(before, read(), seconds)
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--tag"]:
         print(tag())
     elif sys.argv[1:] == ["--json"]:
         print(json.dumps(describe(), indent=2))
+    elif len(sys.argv) == 3 and sys.argv[1] == "--cpu-use" and re.fullmatch(r"\d+(\.\d+)?", sys.argv[2]):
+        print(json.dumps(sample_cpu_use(float(sys.argv[2]))))
     else:
         print(__doc__, file=sys.stderr)
         sys.exit(2)

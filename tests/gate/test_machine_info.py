@@ -3,7 +3,8 @@ behind one generic VM model name ("AMD EPYC") given one tag, so that a run on on
 other's results; AMD family 19h's Zen 3 and Zen 4 model ranges confused; a generation appended
 to a name that has a model number (the folder of a named CPU would change for nothing); an Intel
 model number read without its family 6, or a client core (model 151, Alder Lake) taken for a
-server one; a clock in the name ("@ 2.20GHz") taken for a model number."""
+server one; a clock in the name ("@ 2.20GHz") taken for a model number. Class CpuUse names its
+own."""
 import os
 import sys
 import unittest
@@ -41,6 +42,27 @@ class Tag(unittest.TestCase):
         self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 6, 151)), "intel-xeon_avx512")
         self.assertEqual(tag("Intel(R) Xeon(R) Processor", ("GenuineIntel", 15, 207)), "intel-xeon_avx512")
         self.assertEqual(tag("AMD EPYC", ("", -1, -1)), "amd-epyc_avx512")
+
+
+class CpuUse(unittest.TestCase):
+    """The CPUs' busy and stolen shares between two /proc/stat readings. Wrong code this catches:
+    a per-CPU line read instead of the aggregate one, iowait counted as busy, guest time counted
+    twice (it is inside user already), steal left out of the total, the shares of the totals
+    since boot instead of the difference."""
+
+    BEFORE = "cpu  1000 0 500 8000 400 10 10 80 300 0\ncpu0 1 1 1 1 1 1 1 1 1 1\nintr 9\n"
+    AFTER = "cpu  1100 0 550 8300 420 10 20 100 350 0\ncpu0 2 2 2 2 2 2 2 2 2 2\nintr 10\n"
+
+    def test_shares_of_the_difference(self):
+        before, after = machine_info.cpu_times(self.BEFORE), machine_info.cpu_times(self.AFTER)
+        self.assertEqual(before, (1520, 8400, 80))
+        # Busy 160 (user 100, system 50, softirq 10), idle 320 (idle 300, iowait 20), steal 20.
+        self.assertEqual(machine_info.cpu_use(before, after, 3), {"seconds": 3, "busy": 0.32, "steal": 0.04})
+
+    def test_a_kernel_without_steal_and_no_reading(self):
+        self.assertEqual(machine_info.cpu_times("cpu 1 2 3 4\n"), (6, 4, 0))
+        self.assertEqual(machine_info.cpu_use(None, (1, 2, 3), 3), {})
+        self.assertIsNone(machine_info.cpu_times("intr 5\n"))
 
 
 if __name__ == "__main__":

@@ -85,9 +85,12 @@ class StreamSpread(unittest.TestCase):
 
 
 class MachineLoad(unittest.TestCase):
-    """The busy verdict reads the load before bench.sh's own build when run.json has it. Wrong
-    code this catches: the verdict taken from the load at the benchmark's start (which the build
-    just before inflates) although the earlier reading exists; a busy machine not flagged."""
+    """The busy verdict reads the CPUs' busy share sampled before bench.sh's build when run.json
+    has it, else the load before that build, else the load at the start. Wrong code this
+    catches: the verdict taken from the load at the benchmark's start (which the build just
+    before inflates) although an earlier reading exists; from the load average (which still
+    carries work that ended before the run) although the CPU sample exists; a busy machine not
+    flagged; the steal share not named, or named when small."""
 
     context = {"num_cpus": 2, "load_avg": [1.68, 0.67, 0.25]}
 
@@ -104,6 +107,23 @@ class MachineLoad(unittest.TestCase):
 
     def test_without_the_earlier_reading_the_start_load_decides(self):
         self.assertEqual(len(self.busy({})), 1)
+
+    def test_the_cpu_sample_decides_over_the_load_average(self):
+        # Work that ended seconds before the build: the load average is high, the CPUs idle.
+        run = {"load_before_build": [1.15, 1.08, 0.65], "cpu_use_before_build": {"seconds": 3, "busy": 0.02, "steal": 0.0}}
+        self.assertEqual(self.busy(run), [])
+        lines = bench_report.machine_section(run, self.context)
+        self.assertIn("- CPU time before the build, over 3 s (/proc/stat): 2 % of all CPUs' time busy, "
+                      "0 % stolen by the hypervisor", lines)
+        self.assertFalse(any("hypervisor took" in line for line in lines), lines)
+
+    def test_a_busy_cpu_sample_makes_it_busy(self):
+        run = {"load_before_build": [0.1, 0.1, 0.1], "cpu_use_before_build": {"seconds": 3, "busy": 0.4, "steal": 0.12}}
+        busy = self.busy(run)
+        self.assertEqual(len(busy), 1)
+        self.assertIn("40 % of the 2 CPUs' time was busy just before the run's build", busy[0])
+        lines = bench_report.machine_section(run, self.context)
+        self.assertEqual(len([line for line in lines if "The hypervisor took 12 %" in line]), 1, lines)
 
 
 class CoreToCore(unittest.TestCase):
