@@ -11,7 +11,9 @@
 // the roof of a pass whose reads miss at scattered places, and is left out of the STREAM roof.
 // Each array is four times the L3 that the machine reports, rounded up to a multiple of 128 MiB
 // (128 MiB on a 32 MiB Zen L3 or where none is reported, 1,152 MiB on a 260 MiB Xeon L3; the
-// three arrays within a quarter of the memory: array_mib), so every pass comes from memory,
+// L3 is what glibc reads from cpuid, which a VM may set apart from lscpu's: 320 MiB on a Zen 4
+// VM whose lscpu shows 32, hence 1,280 MiB there; the three arrays within a quarter of the
+// memory: array_mib), so every pass comes from memory,
 // not from a cache that holds a whole array; allocated as the fast backend's state is (on huge
 // pages where the kernel gives them: with 4 KiB pages the gather's lines also miss the TLB).
 // Threads as in the other benchmarks: tbb::global_control caps the parallelism at T; the range
