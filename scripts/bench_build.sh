@@ -48,14 +48,16 @@ probe_options() {
 # probe_begin TARGET NAME: installs what a fresh machine lacks, builds TARGET in the bench build
 # and sets `probe` (its path), `out` (results/<machine-tag>/NAME.txt unless already set) and
 # `tmp`, the file the run collects into (removed on exit unless probe_end moves it), headed by
-# the script, the revision, the time, the CPU and the load.
+# the script, the revision, the time, the CPU, the load average (which still carries the build)
+# and the CPUs' busy and stolen shares over the 3 s after the build (what competes now).
 probe_begin() {
   bench_setup
   build_bench "$build" "$1"
   # shellcheck disable=SC2034  # read by the caller
   probe=$build/bench/$1
-  local tag
+  local tag use
   tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
+  use=$(/usr/bin/python3 "$root/scripts/machine_info.py" --cpu-use 3)
   out=${out:-$root/results/$tag/$2.txt}
   mkdir -p "$(dirname "$out")"
   tmp=$(mktemp)
@@ -63,6 +65,7 @@ probe_begin() {
   {
     echo "# scripts/$(basename "$0") at $rev, $(date -u +%Y-%m-%dT%H:%M:%SZ)"
     echo "# $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) CPUs; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+    echo "# CPU time over the 3 s before the run (/proc/stat): $use"
   } > "$tmp"
 }
 
