@@ -40,7 +40,7 @@ read -r load1 load5 load15 _ < /proc/loadavg
 bench_setup
 # What competes for the CPUs now (the load average still carries work that ended a minute ago):
 # the busy and stolen shares of all CPUs' time over a few seconds, after the set-up's installs.
-cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3)
+cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3) || cpu_use='{}'  # a reading, not worth stopping for
 echo "bench.sh: configuring and building crumple_bench (Release) in $build"
 build_bench "$build" crumple_bench
 bin=$build/bench/crumple_bench

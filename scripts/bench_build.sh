@@ -55,9 +55,9 @@ probe_begin() {
   build_bench "$build" "$1"
   # shellcheck disable=SC2034  # read by the caller
   probe=$build/bench/$1
-  local tag use
+  local tag use seconds=3
   tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
-  use=$(/usr/bin/python3 "$root/scripts/machine_info.py" --cpu-use 3)
+  use=$(/usr/bin/python3 "$root/scripts/machine_info.py" --cpu-use "$seconds") || use='{}'
   out=${out:-$root/results/$tag/$2.txt}
   mkdir -p "$(dirname "$out")"
   tmp=$(mktemp)
@@ -65,7 +65,7 @@ probe_begin() {
   {
     echo "# scripts/$(basename "$0") at $rev, $(date -u +%Y-%m-%dT%H:%M:%SZ)"
     echo "# $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) CPUs; load average $(cut -d' ' -f1-3 /proc/loadavg)"
-    echo "# CPU time over the 3 s before the run (/proc/stat): $use"
+    echo "# CPU time over the $seconds s before the run (/proc/stat; busy and stolen shares of all CPUs' time, {} if unread): $use"
   } > "$tmp"
 }
 

@@ -728,10 +728,10 @@ def load_lines(run, context, cpus):
     why = ""
     if "busy" in use:
         lines.append(f"- CPU time before the build, over {use.get('seconds', 0):g} s (/proc/stat): "
-                     f"{100 * use['busy']:.0f} % of all CPUs' time busy, {100 * use.get('steal', 0):.0f} % "
+                     f"{100 * use['busy']:.1f} % of all CPUs' time busy, {100 * use.get('steal', 0):.1f} % "
                      "stolen by the hypervisor")
         if use["busy"] > BUSY_SHARE:
-            why = f"{100 * use['busy']:.0f} % of the {cpus} CPUs' time was busy just before the run's build"
+            why = f"{100 * use['busy']:.1f} % of the {cpus} CPUs' time was busy just before the run's build"
     elif load and load[0] > 0.5 * cpus:
         when = "before the run's build" if before else "when the run started"
         why = f"load average {load[0]:.2f} on {cpus} CPUs {when}"
@@ -739,7 +739,7 @@ def load_lines(run, context, cpus):
         lines.append(f"- **The machine was busy**: {why}, "
                      "so other work competed for the cores and the timings are noisier (see CV) and slower than on an idle machine")
     if use.get("steal", 0) > STEAL_SHARE:
-        lines.append(f"- **The hypervisor took {100 * use['steal']:.0f} % of the CPUs' time** before the run "
+        lines.append(f"- **The hypervisor took {100 * use['steal']:.1f} % of the CPUs' time** before the run "
                      "(steal): the host's other guests competed for the cores")
     return lines
 

@@ -168,7 +168,8 @@ def describe():
 
 def cpu_times(stat_text):
     """The aggregate "cpu" line of /proc/stat as (busy, idle, steal) jiffies: busy is user, nice,
-    system, irq and softirq; idle is idle and iowait (guest time is counted in user already)."""
+    system, irq and softirq; idle is idle and iowait (guest and guest_nice time are counted in
+    user and nice already)."""
     for line in stat_text.splitlines():
         fields = line.split()
         if fields and fields[0] == "cpu":
@@ -196,7 +197,7 @@ def sample_cpu_use(seconds):
         try:
             with open("/proc/stat") as f:
                 return cpu_times(f.read())
-        except OSError:
+        except (OSError, ValueError):
             return None
     before = read()
     time.sleep(seconds)

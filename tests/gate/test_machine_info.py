@@ -62,6 +62,7 @@ class CpuUse(unittest.TestCase):
     def test_a_kernel_without_steal_and_no_reading(self):
         self.assertEqual(machine_info.cpu_times("cpu 1 2 3 4\n"), (6, 4, 0))
         self.assertEqual(machine_info.cpu_use(None, (1, 2, 3), 3), {})
+        self.assertEqual(machine_info.cpu_use((1, 2, 3), (1, 2, 3), 0), {})  # no time between: no shares
         self.assertIsNone(machine_info.cpu_times("intr 5\n"))
 
 

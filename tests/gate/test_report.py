@@ -114,17 +114,30 @@ class MachineLoad(unittest.TestCase):
         run = {"load_before_build": [1.15, 1.08, 0.65], "cpu_use_before_build": {"seconds": 3, "busy": 0.02, "steal": 0.0}}
         self.assertEqual(self.busy(run), [])
         lines = bench_report.machine_section(run, self.context)
-        self.assertIn("- CPU time before the build, over 3 s (/proc/stat): 2 % of all CPUs' time busy, "
-                      "0 % stolen by the hypervisor", lines)
+        self.assertIn("- CPU time before the build, over 3 s (/proc/stat): 2.0 % of all CPUs' time busy, "
+                      "0.0 % stolen by the hypervisor", lines)
         self.assertFalse(any("hypervisor took" in line for line in lines), lines)
 
     def test_a_busy_cpu_sample_makes_it_busy(self):
         run = {"load_before_build": [0.1, 0.1, 0.1], "cpu_use_before_build": {"seconds": 3, "busy": 0.4, "steal": 0.12}}
         busy = self.busy(run)
         self.assertEqual(len(busy), 1)
-        self.assertIn("40 % of the 2 CPUs' time was busy just before the run's build", busy[0])
+        self.assertIn("40.0 % of the 2 CPUs' time was busy just before the run's build", busy[0])
         lines = bench_report.machine_section(run, self.context)
-        self.assertEqual(len([line for line in lines if "The hypervisor took 12 %" in line]), 1, lines)
+        self.assertEqual(len([line for line in lines if "The hypervisor took 12.0 %" in line]), 1, lines)
+
+    def test_the_thresholds(self):
+        def verdicts(busy, steal):
+            run = {"cpu_use_before_build": {"seconds": 3, "busy": busy, "steal": steal}}
+            lines = bench_report.machine_section(run, self.context)
+            return any("was busy" in line for line in lines), any("hypervisor took" in line for line in lines)
+        self.assertEqual(verdicts(0.2, 0.03), (False, False))
+        self.assertEqual(verdicts(0.3, 0.07), (True, True))
+
+    def test_an_unread_sample_leaves_the_load_average_to_decide(self):
+        run = {"load_before_build": [1.9, 1.5, 1.2], "cpu_use_before_build": {}}
+        self.assertEqual(len(self.busy(run)), 1)
+        self.assertFalse(any("CPU time before" in line for line in bench_report.machine_section(run, self.context)))
 
 
 class CoreToCore(unittest.TestCase):
