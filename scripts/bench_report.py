@@ -293,14 +293,15 @@ def stream_table(benches, stream):
     spread = stream_bandwidth(benches, spread=True)
     kernels = sorted({k for per_t in stream.values() for k in per_t})
     lines = ["| threads | " + " | ".join(f"{k} GB/s" for k in kernels) + " |", "|---:|" + "---:|" * len(kernels)]
+    ranged = False
     for threads in sorted(stream):
         cells = []
         for k in kernels:
             median = stream[threads].get(k, float("nan"))
-            lo, hi = spread.get(threads, {}).get(k, (median, median))
-            cells.append(f"{median:.1f}" + (f" ({lo:.1f}-{hi:.1f})" if f"{lo:.1f}" != f"{hi:.1f}" else ""))
+            lo, hi = (f"{x:.1f}" for x in spread.get(threads, {}).get(k, (median, median)))
+            ranged |= lo != hi
+            cells.append(f"{median:.1f}" + (f" ({lo}-{hi})" if lo != hi else ""))
         lines.append(f"| {threads} | " + " | ".join(cells) + " |")
-    ranged = any("(" in line for line in lines[2:])
     return lines + [""] + (["In brackets: the lowest and highest repetition.", ""] if ranged else [])
 
 
