@@ -1,6 +1,7 @@
 // The fast backend's state as the rest of the program sees it: totals, snapshots, test hooks.
 // Everything here is in logical ids (topology.h): element k of every list is logical id k,
-// whatever slot layout.h has put it in, and sums run in logical order.
+// whatever slot layout.h has put it in, and sums run in logical order, but for the squared
+// strains (edge_totals).
 #include <algorithm>
 #include <cmath>
 
@@ -17,12 +18,13 @@ struct TotalsPart {
   int mesh_edges = 0, auxiliary = 0;
   bool finite = true;
 };
-/// The sums run in logical order, so each id's slot is a random read: the rows of the id this
-/// far ahead are prefetched (an edge's record twice as far, its endpoints' rows this far), so
-/// that the reads overlap instead of waiting one after the other.
+/// The vertex sums run in logical order, so each id's slot is a random read: the rows of the id
+/// this far ahead are prefetched, so that the reads overlap instead of waiting one after the
+/// other.
 constexpr int kTotalsAhead = 16;
 
-void vertex_totals(const Vertices& V, const double c[3], int begin, int end, TotalsPart& t) {
+void vertex_totals(const Vertices& V, const double c[3], int begin, int end, TotalsPart& out) {
+  TotalsPart t = out;  // a local, whose sums stay in registers (through `out` each add would store)
   for (int id = begin; id < end; ++id) {
     if (id + kTotalsAhead < end) {
       const int ahead = V.phys[id + kTotalsAhead];
@@ -42,37 +44,36 @@ void vertex_totals(const Vertices& V, const double c[3], int begin, int end, Tot
     t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
     t.finite &= bool(std::isfinite(V.xm[v].x + V.xm[v].y + V.xm[v].z + v2));
   }
+  out = t;
 }
 
-void edge_totals(const Edges& E, const Vertices& V, int begin, int end, TotalsPart& t) {
-  for (int id = begin; id < end; ++id) {
-    if (id + 2 * kTotalsAhead < end) {
-      const char* record = reinterpret_cast<const char*>(&E[E.phys[id + 2 * kTotalsAhead]]);
-      __builtin_prefetch(record), __builtin_prefetch(record + sizeof(EdgeRecord) - 1);
-    }
-    if (id + kTotalsAhead < end) {
-      const EdgeRecord& ahead = E[E.phys[id + kTotalsAhead]];
-      __builtin_prefetch(&V.xm[ahead.a]), __builtin_prefetch(&V.xm[ahead.b]);
-    }
-    const int e = E.phys[id];
-    const std::uint8_t flags = E[e].flags;
-    if (!(flags & kAlive)) continue;
-    if (!(flags & kMesh)) {
-      ++t.auxiliary;
+// Over slots, where the records stream and the layout keeps each edge's endpoints near it (in
+// logical order every record and both endpoints are random reads). The counts and the largest
+// strain do not depend on the order; the squared strains' sum, which only the instability check
+// reads (rms_strain), may differ in its last bits with the layout (docs/DECISIONS.md D12).
+void edge_totals(const Edges& E, const Vertices& V, int begin, int end, TotalsPart& out) {
+  double max_strain = 0, strain2 = 0;
+  int mesh = 0, auxiliary = 0;
+  for (int e = begin; e < end; ++e) {
+    const EdgeRecord& r = E[e];
+    if (!(r.flags & kAlive)) continue;
+    if (!(r.flags & kMesh)) {
+      ++auxiliary;
       continue;
     }
-    ++t.mesh_edges;
-    const int a = E[e].a, b = E[e].b;
-    const double dx = double(V.xm[a].x) - V.xm[b].x, dy = double(V.xm[a].y) - V.xm[b].y, dz = double(V.xm[a].z) - V.xm[b].z;
-    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / E[e].l0 - 1.0;
-    t.max_strain = std::max(t.max_strain, std::abs(strain));
-    t.strain2 += strain * strain;
+    ++mesh;
+    const Float4 pa = V.xm[r.a], pb = V.xm[r.b];
+    const double dx = double(pa.x) - pb.x, dy = double(pa.y) - pb.y, dz = double(pa.z) - pb.z;
+    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / r.l0 - 1.0;
+    max_strain = std::max(max_strain, std::abs(strain));
+    strain2 += strain * strain;
   }
+  out.max_strain = max_strain, out.strain2 = strain2, out.mesh_edges = mesh, out.auxiliary = auxiliary;
 }
 }  // namespace
 
-// Sums over logical ids (the layout does not change them), in fixed blocks of ids whose partial
-// sums are added in block order: the same bits on any thread count.
+// Sums in fixed blocks (of ids; of slots for the edges) whose partial sums are added in block
+// order: the same bits on any thread count.
 Totals FastSimulator::totals() const {
   const Vertices& V = topo_.V;
   const Edges& E = topo_.E;

@@ -505,26 +505,30 @@ TEST(Layout, RelayoutEveryStepChangesNoBit) {
   }
 }
 
-// The totals (fast_state.cpp: blocks of logical ids, read through the slot map with rows
-// prefetched, the edge counts taken in the same loop) do not depend on where the slots are: the
-// same state with slots moved by a relayout every step and with slots never moved gives the
-// same totals bit for bit, and they are the plain sums over the snapshot (the counts exactly,
-// the sums to round-off: the compiler may fuse the core's multiply-adds). With splits, restores
-// and freed ids in the state. Catches a sum in slot order, a dead or auxiliary edge counted as a
-// mesh edge, and a block left out.
-TEST(FastTotals, AreSumsInLogicalOrderWhereverTheSlotsAre) {
+// The totals (fast_state.cpp: the vertex sums in blocks of logical ids, read through the slot
+// map; the edges' counts, largest strain and squared strains in blocks of slots) are the plain
+// sums over the snapshot (the counts exactly, the sums to round-off: the compiler may fuse the
+// core's multiply-adds), with splits, restores and freed ids in the state; the same state with
+// slots moved by a relayout every step and with slots never moved gives the same totals bit for
+// bit but for the squared strains' sum (summed in slot order: rms_strain to round-off); one and
+// four threads give the same bits. Catches a vertex sum in slot order, a dead or auxiliary edge
+// counted as a mesh edge or strained (a dead slot's strain is -1), a block left out, and edge
+// sums whose blocks follow the threads.
+TEST(FastTotals, AreTheSumsOverTheSnapshotWhereverTheSlotsAre) {
   Params p = churn_params();
-  auto run = [&](double fraction) {
-    auto sim = std::make_unique<fast::FastSimulator>(make_grid(40), p, 2);
+  auto run = [&](double fraction, int threads) {
+    auto sim = std::make_unique<fast::FastSimulator>(make_grid(40), p, threads);
     sim->set_layout_fraction(fraction);
     long restores = 0;
     for (int step = 0; step < 120; ++step) restores += sim->step().restores;
     EXPECT_GT(restores, 50);
     EXPECT_FALSE(sim->topology().V.free_ids.empty());
+    EXPECT_GT(sim->topology().E.size(), fast::kReduceBlock) << "the edges span one block: nothing to add up";
     return sim;
   };
-  const Snapshot s = run(-1)->snapshot();
-  const Totals never = run(-1)->totals(), every = run(0)->totals();
+  const auto sim = run(-1, 2);
+  const Snapshot s = sim->snapshot();
+  const Totals never = sim->totals(), every = run(0, 2)->totals();
   for (const Totals* t : {&never, &every}) {
     EXPECT_EQ(t->edges, std::count_if(s.edges.begin(), s.edges.end(), [](const EdgeView& e) { return e.a >= 0 && !e.auxiliary; }));
     EXPECT_EQ(t->auxiliary, std::count_if(s.edges.begin(), s.edges.end(), [](const EdgeView& e) { return e.a >= 0 && e.auxiliary; }));
@@ -536,16 +540,35 @@ TEST(FastTotals, AreSumsInLogicalOrderWhereverTheSlotsAre) {
     for (int d = 0; d < 3; ++d) momentum[d] += m * s.velocity[v][d];
     kinetic += 0.5 * m * (s.velocity[v][0] * s.velocity[v][0] + s.velocity[v][1] * s.velocity[v][1] + s.velocity[v][2] * s.velocity[v][2]);
   }
+  double max_strain = 0, strain2 = 0;
+  for (const EdgeView& e : s.edges) {
+    if (e.a < 0 || e.auxiliary) continue;
+    const Vec3d &xa = s.position[std::size_t(e.a)], &xb = s.position[std::size_t(e.b)];
+    const double strain = std::hypot(xa[0] - xb[0], xa[1] - xb[1], xa[2] - xb[2]) / e.rest - 1.0;
+    max_strain = std::max(max_strain, std::abs(strain));
+    strain2 += strain * strain;
+  }
   EXPECT_EQ(never.mass, mass);  // float masses summed in double in one order: no product to fuse
   EXPECT_NEAR(never.kinetic, kinetic, 1e-12 * kinetic);
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(never.momentum[d], momentum[d], 1e-12 * mass) << d;
+  EXPECT_NEAR(never.max_strain, max_strain, 1e-12 * max_strain);
+  const double rms = std::sqrt(strain2 / never.edges);
+  EXPECT_NEAR(never.rms_strain, rms, 1e-12 * rms);
+  EXPECT_NEAR(every.rms_strain, rms, 1e-12 * rms);
   EXPECT_EQ(every.mass, never.mass);
   for (int d = 0; d < 3; ++d) EXPECT_EQ(every.momentum[d], never.momentum[d]) << d;
   EXPECT_EQ(every.kinetic, never.kinetic);
-  EXPECT_EQ(every.rms_strain, never.rms_strain);
   EXPECT_EQ(every.max_strain, never.max_strain);
   EXPECT_EQ(every.max_speed, never.max_speed);
   EXPECT_EQ(every.max_distance, never.max_distance);
+  for (int threads : {1, 4}) {
+    const Totals t = run(-1, threads)->totals();
+    EXPECT_EQ(t.mass, never.mass) << threads;
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(t.momentum[d], never.momentum[d]) << threads;
+    EXPECT_EQ(t.kinetic, never.kinetic) << threads;
+    EXPECT_EQ(t.rms_strain, never.rms_strain) << threads;
+    EXPECT_EQ(t.max_strain, never.max_strain) << threads;
+  }
 }
 
 // The render buffers (fast_manipulators.cpp: vertices copied in slot order to their ids'
