@@ -105,8 +105,8 @@ class FastSimulator final : public Simulator {
   const LayoutScratch& layout_scratch() const { return layout_scratch_; }
   /// When to relayout: once the vertices created since the last one reach this fraction of the
   /// slots (0: after every step's topology pass; negative: never). Results do not depend on it
-  /// but for the last bits of the momentum correction (layout.h). A relayout's later phases
-  /// run in the steps after its first, whatever the fraction.
+  /// but for the last bits of the momentum correction and of totals().rms_strain (layout.h). A
+  /// relayout's later phases run in the steps after its first, whatever the fraction.
   void set_layout_fraction(double f) { layout_fraction_ = f; }
   /// Relayout phases run since construction.
   std::uint64_t relayout_phases() const { return relayout_phases_; }

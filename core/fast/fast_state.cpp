@@ -1,7 +1,7 @@
 // The fast backend's state as the rest of the program sees it: totals, snapshots, test hooks.
 // Everything here is in logical ids (topology.h): element k of every list is logical id k,
-// whatever slot layout.h has put it in, and sums run in logical order, but for the squared
-// strains (edge_totals).
+// whatever slot layout.h has put it in, and sums run in logical order, but for the edges' part
+// of the totals (edge_totals).
 #include <algorithm>
 #include <cmath>
 
@@ -10,21 +10,24 @@
 namespace crumple::fast {
 
 namespace {
-/// One block's share of the totals: sums in double, maxima, counts, and whether any state was
-/// not finite.
-struct TotalsPart {
+/// One block of vertex ids' share of the totals: sums in double, maxima, and whether any state
+/// was not finite.
+struct VertexPart {
   double mass = 0, momentum[3] = {0, 0, 0}, kinetic = 0, max_speed = 0, max_distance = 0;
+  bool finite = true;
+};
+/// One block of edge slots' share: the largest strain, the squared strains' sum, the counts.
+struct EdgePart {
   double max_strain = 0, strain2 = 0;
   int mesh_edges = 0, auxiliary = 0;
-  bool finite = true;
 };
 /// The vertex sums run in logical order, so each id's slot is a random read: the rows of the id
 /// this far ahead are prefetched, so that the reads overlap instead of waiting one after the
 /// other.
 constexpr int kTotalsAhead = 16;
 
-void vertex_totals(const Vertices& V, const double c[3], int begin, int end, TotalsPart& out) {
-  TotalsPart t = out;  // a local, whose sums stay in registers (through `out` each add would store)
+void vertex_totals(const Vertices& V, const double c[3], int begin, int end, VertexPart& out) {
+  VertexPart t;  // a local, whose sums stay in registers (through `out` each add would store)
   for (int id = begin; id < end; ++id) {
     if (id + kTotalsAhead < end) {
       const int ahead = V.phys[id + kTotalsAhead];
@@ -51,24 +54,23 @@ void vertex_totals(const Vertices& V, const double c[3], int begin, int end, Tot
 // logical order every record and both endpoints are random reads). The counts and the largest
 // strain do not depend on the order; the squared strains' sum, which only the instability check
 // reads (rms_strain), may differ in its last bits with the layout (docs/DECISIONS.md D12).
-void edge_totals(const Edges& E, const Vertices& V, int begin, int end, TotalsPart& out) {
-  double max_strain = 0, strain2 = 0;
-  int mesh = 0, auxiliary = 0;
+void edge_totals(const Edges& E, const Vertices& V, int begin, int end, EdgePart& out) {
+  EdgePart t;  // a local, as in vertex_totals
   for (int e = begin; e < end; ++e) {
     const EdgeRecord& r = E[e];
     if (!(r.flags & kAlive)) continue;
     if (!(r.flags & kMesh)) {
-      ++auxiliary;
+      ++t.auxiliary;
       continue;
     }
-    ++mesh;
+    ++t.mesh_edges;
     const Float4 pa = V.xm[r.a], pb = V.xm[r.b];
     const double dx = double(pa.x) - pb.x, dy = double(pa.y) - pb.y, dz = double(pa.z) - pb.z;
     const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / r.l0 - 1.0;
-    max_strain = std::max(max_strain, std::abs(strain));
-    strain2 += strain * strain;
+    t.max_strain = std::max(t.max_strain, std::abs(strain));
+    t.strain2 += strain * strain;
   }
-  out.max_strain = max_strain, out.strain2 = strain2, out.mesh_edges = mesh, out.auxiliary = auxiliary;
+  out = t;
 }
 }  // namespace
 
@@ -79,24 +81,27 @@ Totals FastSimulator::totals() const {
   const Edges& E = topo_.E;
   const double c[3] = {scene_.center[0], scene_.center[1], scene_.center[2]};
   const int nv = V.size(), ne = E.size();
-  std::vector<TotalsPart> parts(std::size_t(Parallel::blocks_of(std::max(nv, ne), kReduceBlock)));
-  par_.run_blocks(nv, kReduceBlock, [&](int b, int begin, int end) { vertex_totals(V, c, begin, end, parts[b]); });
-  par_.run_blocks(ne, kReduceBlock, [&](int b, int begin, int end) { edge_totals(E, V, begin, end, parts[b]); });
+  std::vector<VertexPart> vertex_parts(std::size_t(Parallel::blocks_of(nv, kReduceBlock)));
+  std::vector<EdgePart> edge_parts(std::size_t(Parallel::blocks_of(ne, kReduceBlock)));
+  par_.run_blocks(nv, kReduceBlock, [&](int b, int begin, int end) { vertex_totals(V, c, begin, end, vertex_parts[b]); });
+  par_.run_blocks(ne, kReduceBlock, [&](int b, int begin, int end) { edge_totals(E, V, begin, end, edge_parts[b]); });
   Totals T;
   T.vertices = topo_.live_vertices();
   T.triangles = topo_.live_triangles();
   bool finite = true;
-  for (const TotalsPart& t : parts) {
+  for (const VertexPart& t : vertex_parts) {
     T.mass += t.mass;
     for (int d = 0; d < 3; ++d) T.momentum[d] += t.momentum[d];
     T.kinetic += t.kinetic;
     T.max_speed = std::max(T.max_speed, t.max_speed);
     T.max_distance = std::max(T.max_distance, t.max_distance);
+    finite &= t.finite;
+  }
+  for (const EdgePart& t : edge_parts) {
     T.max_strain = std::max(T.max_strain, t.max_strain);
     T.rms_strain += t.strain2;
     T.edges += t.mesh_edges;
     T.auxiliary += t.auxiliary;
-    finite &= t.finite;
   }
   if (!finite) T.max_distance = NAN;
   T.rms_strain = std::sqrt(T.rms_strain / std::max(1, T.edges));

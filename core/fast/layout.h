@@ -10,7 +10,8 @@
 // relayout() reorders every slot, keeping every logical id (topology.h), every adjacency list's
 // order and every value, so a step after it computes bit for bit what it would have without it,
 // except for the sums over all vertices whose block order follows the slots (the momentum
-// correction of DECISIONS.md D2). Vertices go along a Morton (Z-order) curve of their rest
+// correction of DECISIONS.md D2), and totals() adds the squared strains in slot order too
+// (rms_strain, D12). Vertices go along a Morton (Z-order) curve of their rest
 // positions (over the axes the sheet spans): the sheet's material coordinates, where neighbours
 // are near each other however the sheet is crumpled, and where an inserted vertex lies between
 // its parents [Eq 7]. Edges then follow their lower endpoint (read from the spring lists) and
