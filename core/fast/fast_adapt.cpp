@@ -130,17 +130,31 @@ StepEvents FastSimulator::adapt_apply() {
   } else {
     ev.splits = rounds_.apply(*this, splits, stamps_);
     ev.restores = waves_.apply(*this, events_.restores, stamps_);
-    rounds_.touched(touched_), waves_.touched(touched_);
   }
-  // The ids, read off the candidates in event order: a split leaves its edge auxiliary, a
-  // restore makes its auxiliary edge a mesh edge again, and nothing else changes either flag.
-  // (A restore may free a candidate that did not split: hence the alive bit in the test.)
-  for (int e : splits)
+  // What is left touches two disjoint sets of data, so the serial parts run side by side: the
+  // freed ids onto the free lists and the events' ids for the caller on one thread; the
+  // vertices to renew listed, then their normals renewed, on the other (a parallel loop the
+  // first thread joins when it is done).
+  par_.invoke(
+      [&] {
+        if (!serial_edits_) waves_.free_ids(topo_);
+        list_event_ids(ev);
+      },
+      [&] {
+        if (!serial_edits_) rounds_.touched(touched_), waves_.touched(touched_);
+        renew_normals();
+      });
+  return ev;
+}
+
+// The ids, read off the candidates in event order: a split leaves its edge auxiliary, a restore
+// makes its auxiliary edge a mesh edge again, and nothing else changes either flag. (A restore
+// may free a candidate that did not split: hence the alive bit in the test.)
+void FastSimulator::list_event_ids(StepEvents& ev) const {
+  for (int e : events_.splits)
     if ((topo_.E[e].flags & (kAlive | kMesh)) == kAlive) ev.split_edges.push_back(topo_.E.lid[e]);
   for (int e : events_.restores)
     if (topo_.E[e].flags & kMesh) ev.restored_edges.push_back(topo_.E.lid[e]);
-  renew_normals();
-  return ev;
 }
 
 void FastSimulator::collect_events() {

@@ -157,6 +157,7 @@ class FastSimulator final : public Simulator {
   friend struct SerialEvents;
   void list_events(int block, int begin, int end);
   void collect_events();
+  void list_event_ids(StepEvents& ev) const;
   void renew_normals();
   void collect_renewed_vertices();
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)

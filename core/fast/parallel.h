@@ -6,6 +6,7 @@
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/parallel_invoke.h>
 #include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
@@ -94,6 +95,39 @@ class Parallel {
   void run_lanes(int n, int grain, const Kernel& kernel) const {
     const int blocks = (n + kLanes - 1) / kLanes;
     run(blocks, std::max(1, grain / kLanes), [&](int b0, int b1) { kernel(b0 * kLanes, std::min(n, b1 * kLanes)); });
+  }
+
+  /// Runs first() and second() at once, each on one thread (first, then second, on one thread):
+  /// for two serial jobs that touch disjoint data, so that neither core waits while the other
+  /// runs a serial phase. A parallel loop inside either runs on the threads the other leaves.
+  template <class First, class Second>
+  void invoke(const First& first, const Second& second) const {
+    if (threads_ == 1) {
+      first();
+      second();
+      return;
+    }
+    int before = 0, after_first = 0, after_second = 0;  // addresses for the annotations above
+    CRUMPLE_TSAN_RELEASE(&before);
+    auto both = [&] {
+      tbb::parallel_invoke(
+          [&] {
+            CRUMPLE_TSAN_ACQUIRE(&before);
+            first();
+            CRUMPLE_TSAN_RELEASE(&after_first);
+          },
+          [&] {
+            CRUMPLE_TSAN_ACQUIRE(&before);
+            second();
+            CRUMPLE_TSAN_RELEASE(&after_second);
+          });
+    };
+    if (arena_)
+      arena_->execute(both);
+    else
+      both();
+    CRUMPLE_TSAN_ACQUIRE(&after_first);
+    CRUMPLE_TSAN_ACQUIRE(&after_second);
   }
 
   /// How many fixed blocks of `block` items cover [0, n).

@@ -38,8 +38,11 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, Tr
     pending_.swap(next_);
   }
   std::sort(freed_.begin(), freed_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  for (const auto& f : freed_) sim.topo_.free_ids(f.second);
   return int(freed_.size());
+}
+
+void RestoreWaves::free_ids(Topology& m) const {
+  for (const auto& f : freed_) m.free_ids(f.second);
 }
 
 void RestoreWaves::touched(std::vector<int>& out) const {

@@ -33,8 +33,10 @@ class RestoreWaves {
   void claim_whole(ColdClaims& claims) { claims.whole(claim_); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
   /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
-  /// restores applied.
+  /// restores applied. Their ids stay taken until free_ids().
   int apply(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps);
+  /// Puts what the last apply() freed on m's free lists, in event order (Topology::free_ids).
+  void free_ids(Topology& m) const;
   /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
   void touched(std::vector<int>& out) const;
   /// Waves so far large enough to run as a parallel loop (tests check they happened).

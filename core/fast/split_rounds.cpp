@@ -18,8 +18,10 @@ void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices);
 
 int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const int rounds = plan(sim, splits, stamps);
+  // Both follow from the acceptance alone and touch disjoint data (the lists' heads and pools;
+  // the free lists, plans and stamps), so the serial room runs beside the ids' parallel loop.
+  sim.par_.invoke([&] { make_room(sim); }, [&] { take_ids(sim, stamps); });
   sim.topo_.fit();  // the slots the plans took
-  make_room(sim);
   // A list that outgrew its block during the rounds would have moved it to its pool's end from
   // two threads at once (list_spring's serial fallback): make_room must have given every list
   // its room. Two size tests a pass make that a loud failure rather than a rare race.
@@ -30,11 +32,11 @@ int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, Trian
   return applied;
 }
 
-// The pre-pass: acceptance and rounds serially in event order, then the new ids. What the serial
-// loop needs of each candidate is read in parallel first into a compact array, so that it
-// touches only that array, the stamps and the rounds; it counts the ids each accepted split
-// takes, so that the plans can look theirs up in parallel and take them all at once after.
-// Returns the number of rounds.
+// The pre-pass: acceptance and rounds serially in event order. What the serial loop needs of
+// each candidate is read in parallel first into a compact array, so that it touches only that
+// array, the stamps and the rounds; it counts the ids each accepted split takes, so that the
+// plans can look theirs up in parallel and take them all at once after (take_ids). Returns the
+// number of rounds.
 int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const Topology& m = sim.topo_;
   tally_.resize(std::size_t(m.V.size()), Tally{});
@@ -46,9 +48,7 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
       candidates_[k] = sim.split_candidate(splits[k]);
     }
   });
-  const int rounds = accept(stamps);
-  take_ids(sim, stamps);
-  return rounds;
+  return accept(stamps);
 }
 
 // Acceptance (D13) and rounds, serially in event order.

@@ -364,6 +364,38 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
+// invoke runs each of its two jobs exactly once and returns only when both are done, a parallel
+// loop inside a job covering its range once (the topology pass's serial tails beside its
+// renewal loop, SplitRounds' room beside its ids). Catches a job skipped or run twice, a return
+// before a job has finished, and a nested loop that loses chunks inside the arena.
+TEST(Parallel, InvokeRunsBothJobsOnceAndReturnsWhenBothAreDone) {
+  for (int threads : {1, 2, 4}) {
+    const fast::Parallel par(threads);
+    constexpr int n = 100003;
+    std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n));
+    std::vector<int> serial;
+    std::atomic<int> firsts{0}, seconds{0};
+    par.invoke(
+        [&] {
+          ++firsts;
+          for (int k = 0; k < 1000; ++k) serial.push_back(k);
+        },
+        [&] {
+          ++seconds;
+          par.run(n, 256, [&](int b, int e) {
+            for (int k = b; k < e; ++k) ++seen[std::size_t(k)];
+          });
+        });
+    EXPECT_EQ(firsts.load(), 1) << threads << " threads";
+    EXPECT_EQ(seconds.load(), 1) << threads << " threads";
+    ASSERT_EQ(serial.size(), 1000u) << threads << " threads";
+    EXPECT_EQ(serial.back(), 999) << threads << " threads";
+    int once = 0;
+    for (auto& s : seen) once += s.load() == 1;
+    EXPECT_EQ(once, n) << threads << " threads";
+  }
+}
+
 // The edge pass runs eight edges in AVX lanes (lanes8.h), the last block of a range padded with
 // its last edge: an edge's record must be the same bits whichever lane and chunk computed it,
 // and a range must write no record outside itself. Ranges split at every offset and run last
