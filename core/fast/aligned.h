@@ -118,8 +118,6 @@ class Array : public std::vector<T, AlignedAllocator<T>> {
     const std::uintptr_t boundary = ((base + to * sizeof(T) - 1) / kHugePage + 1) * kHugePage;
     return std::min(this->capacity(), std::size_t(boundary - base) / sizeof(T));
   }
-  /// Faults in all of the room (a resident array: growth within it never faults).
-  void make_resident() { warm_to(this->capacity(), SIZE_MAX); }
   /// The bytes short of `target` (warm_to(target) touches them, and on huge pages up to the
   /// end of the last one).
   std::size_t cold_bytes(std::size_t target) const {
@@ -171,8 +169,8 @@ class ColdClaims {
     const ColdRange r = a.claim_cold(target, budget_ - claimed_);
     if (r.bytes() > 0) ranges_.push_back(r), claimed_ += r.bytes();
   }
-  /// Claims all of a's room: make_resident's bookkeeping without the touch (the fast backend
-  /// touches all its arrays' ranges on every thread: FastSimulator::make_resident).
+  /// Claims all of a's room, for the caller to touch (the fast backend touches all its arrays'
+  /// ranges at once on every thread: FastSimulator::make_resident).
   template <class A>
   void whole(A& a) { claim(a, a.capacity()); }
   std::size_t claimed() const { return claimed_; }

@@ -201,13 +201,6 @@ std::size_t LayoutScratch::cold_bytes(const Topology& m, int threads) const {
   return cold;
 }
 
-void LayoutScratch::make_resident(const Topology& m, const Parallel& par) {
-  std::vector<ColdRange> cold;
-  ColdClaims claims(cold);
-  claim_whole(m, par.threads(), claims);
-  touch_pages(par, cold);
-}
-
 void LayoutScratch::claim_whole(const Topology& m, int threads, ColdClaims& claims) {
   for_each_room(*this, m, threads, [&](auto& a, std::size_t, std::size_t capacity) {
     a.reserve(capacity);  // with the elements: within a relayout the edges' order is read next

@@ -68,14 +68,11 @@ struct LayoutScratch {
   std::size_t claim_cold(const Topology& m, int threads, std::size_t budget, std::vector<ColdRange>& cold);
   /// The bytes short of the targets that warm() touches towards.
   std::size_t cold_bytes(const Topology& m, int threads) const;
-  /// Faults in all of the room, on all of par's threads: each spare at its array's capacity,
-  /// each order's scratch at what reserve() gave it. Keeps the contents: callable within a
-  /// relayout.
-  void make_resident(const Topology& m, const Parallel& par);
-  /// make_resident's reserves and bookkeeping without the touch: adds the ranges to `claims`
-  /// (FastSimulator::make_resident touches them with the state's in one loop).
+  /// Gives every array all of its room (each spare its array's capacity, each order's scratch
+  /// what reserve() gave it) and adds the ranges to `claims`, for FastSimulator::make_resident
+  /// to touch with the state's in one loop. Keeps the contents: callable within a relayout.
   void claim_whole(const Topology& m, int threads, ColdClaims& claims);
-  /// Whether all the room make_resident() faults in is faulted in.
+  /// Whether all the room claim_whole() claims is faulted in.
   bool resident(const Topology& m, int threads) const;
 
   Array<int> vorder, vnew, eorder, enew, torder, tnew, key, idx, count;

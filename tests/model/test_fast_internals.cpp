@@ -139,17 +139,20 @@ TEST(Layout, ScratchCopyKeepsTheRoom) {
   EXPECT_GE(b.spare_rows.capacity(), 700u);
 }
 
-// LayoutScratch::make_resident gives each array its room and keeps its elements: within a
-// relayout the edges' order is read by the next phase. Catches a reserve that reallocates an
-// array empty (a clear before it), which happens when an array lacks room: a scratch never
-// reserved, as here, or a mesh past its reserve.
+// LayoutScratch::claim_whole (FastSimulator::make_resident's part for the scratch) gives each
+// array its room and keeps its elements: within a relayout the edges' order is read by the next
+// phase. Catches a reserve that reallocates an array empty (a clear before it), which happens
+// when an array lacks room: a scratch never reserved, as here, or a mesh past its reserve.
 TEST(Layout, MakeResidentKeepsTheScratchsElements) {
   const fast::FastSimulator sim(make_grid(16), Params{}, 1);
   fast::LayoutScratch s;
   s.eorder.resize(3);
   s.eorder[0] = 7, s.eorder[1] = 5, s.eorder[2] = 9;
   ASSERT_FALSE(s.resident(sim.topology(), 1));
-  s.make_resident(sim.topology(), fast::Parallel(1));
+  std::vector<fast::ColdRange> cold;
+  fast::ColdClaims claims(cold);
+  s.claim_whole(sim.topology(), 1, claims);
+  fast::touch_pages(fast::Parallel(1), cold);
   EXPECT_TRUE(s.resident(sim.topology(), 1));
   ASSERT_EQ(s.eorder.size(), 3u);
   EXPECT_EQ(s.eorder[0], 7);
@@ -840,7 +843,7 @@ TEST(Array, MakeResidentTouchesTheWholeRoomOfByteArrays) {
   bytes.reserve_warm(4 * fast::kHugePage);  // past a huge page: keep_warm warms an eighth only
   bytes.resize(1000);
   ASSERT_LT(bytes.touched(), bytes.capacity());
-  bytes.make_resident();
+  bytes.warm_to(bytes.capacity(), SIZE_MAX);
   EXPECT_EQ(bytes.touched(), bytes.capacity());
   fast::Array<std::uint8_t> copy(bytes);
   EXPECT_EQ(copy.touched(), copy.capacity());
