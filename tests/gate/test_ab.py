@@ -9,12 +9,12 @@ nothing, or a missing binary, accepted silently; with CRUMPLE_AB_PLACEMENT=1, th
 printed out of round order, measured when not asked for, or a missing one passed over.
 """
 import os
-import stat
 import subprocess
-import tempfile
 import textwrap
 import unittest
 from pathlib import Path
+
+from fake_tools import FakeToolsCase
 
 ROOT = Path(__file__).resolve().parents[2]
 AB = ROOT / "scripts" / "ab.sh"
@@ -55,20 +55,10 @@ FAKE = textwrap.dedent("""\
 """)
 
 
-class AbScript(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-        self.log = os.path.join(self.dir.name, "calls.log")
-
-    def tearDown(self):
-        self.dir.cleanup()
-
+class AbScript(FakeToolsCase):
     def fake(self, side, values, names=("BM_Events/fast/1/128",), mode="median", trips=()):
-        path = os.path.join(self.dir.name, side)
-        Path(path).write_text(FAKE.format(values=list(values), log=self.log, names=list(names), side=side,
-                                          mode=mode, trips=list(trips)))
-        os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
-        return path
+        return self.write_fake(side, FAKE.format(values=list(values), log=self.log, names=list(names), side=side,
+                                                 mode=mode, trips=list(trips)))
 
     def run_ab(self, *args, placement=False):
         env = dict(os.environ, CRUMPLE_AB_PLACEMENT="1" if placement else "0")

@@ -8,12 +8,12 @@ wrong, the probe's arguments not passed on, and a probe that fails or prints no 
 silently.
 """
 import os
-import stat
 import subprocess
-import tempfile
 import textwrap
 import unittest
 from pathlib import Path
+
+from fake_tools import FakeToolsCase
 
 ROOT = Path(__file__).resolve().parents[2]
 PROBE_AB = ROOT / "scripts" / "probe_ab.sh"
@@ -37,19 +37,9 @@ FAKE = textwrap.dedent("""\
 """)
 
 
-class ProbeAbScript(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-        self.log = os.path.join(self.dir.name, "calls.log")
-
-    def tearDown(self):
-        self.dir.cleanup()
-
+class ProbeAbScript(FakeToolsCase):
     def fake(self, side, frames, mode="ok"):
-        path = os.path.join(self.dir.name, side)
-        Path(path).write_text(FAKE.format(frames=list(frames), log=self.log, side=side, mode=mode))
-        os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
-        return path
+        return self.write_fake(side, FAKE.format(frames=list(frames), log=self.log, side=side, mode=mode))
 
     def run_script(self, *args):
         return subprocess.run(["bash", str(PROBE_AB), *args], capture_output=True, text=True, timeout=60)
