@@ -17,10 +17,11 @@
 #include "fast/aligned.h"
 
 // ThreadSanitizer cannot see the synchronization inside libtbb (not built with it): that a
-// parallel_for's chunks start after what the caller did before it, and end before it returns.
-// Without telling it, it reports the caller's next writes as races with finished chunks (seen
-// with many short loops in a row). These annotations state exactly that guarantee, and nothing
-// between concurrent chunks, so real races between chunks are still reported.
+// parallel_for's chunks (or a parallel_invoke's jobs) start after what the caller did before
+// it, and end before it returns. Without telling it, it reports the caller's next writes as
+// races with finished chunks (seen with many short loops in a row). These annotations state
+// exactly that guarantee, and nothing between concurrent chunks or jobs, so real races between
+// them are still reported.
 #if defined(__SANITIZE_THREAD__)
 #include <sanitizer/tsan_interface.h>
 #define CRUMPLE_TSAN_RELEASE(p) __tsan_release(p)
@@ -72,17 +73,13 @@ class Parallel {
     }
     int before = 0, after = 0;  // addresses for the annotations above
     CRUMPLE_TSAN_RELEASE(&before);
-    auto loop = [&] {
+    in_arena([&] {
       tbb::parallel_for(tbb::blocked_range<int>(0, n, grain), [&](const tbb::blocked_range<int>& r) {
         CRUMPLE_TSAN_ACQUIRE(&before);
         kernel(r.begin(), r.end());
         CRUMPLE_TSAN_RELEASE(&after);
       });
-    };
-    if (arena_)
-      arena_->execute(loop);
-    else
-      loop();
+    });
     CRUMPLE_TSAN_ACQUIRE(&after);
   }
 
@@ -97,9 +94,10 @@ class Parallel {
     run(blocks, std::max(1, grain / kLanes), [&](int b0, int b1) { kernel(b0 * kLanes, std::min(n, b1 * kLanes)); });
   }
 
-  /// Runs first() and second() at once, each on one thread (first, then second, on one thread):
-  /// for two serial jobs that touch disjoint data, so that neither core waits while the other
-  /// runs a serial phase. A parallel loop inside either runs on the threads the other leaves.
+  /// Runs first() and second(), which may run at once and in either order (on one thread: first,
+  /// then second): for two serial jobs that touch disjoint data, so that one core need not wait
+  /// while the other runs a serial phase. A parallel loop inside either job runs on the threads
+  /// the other leaves. Returns when both are done.
   template <class First, class Second>
   void invoke(const First& first, const Second& second) const {
     if (threads_ == 1) {
@@ -109,7 +107,7 @@ class Parallel {
     }
     int before = 0, after_first = 0, after_second = 0;  // addresses for the annotations above
     CRUMPLE_TSAN_RELEASE(&before);
-    auto both = [&] {
+    in_arena([&] {
       tbb::parallel_invoke(
           [&] {
             CRUMPLE_TSAN_ACQUIRE(&before);
@@ -121,11 +119,7 @@ class Parallel {
             second();
             CRUMPLE_TSAN_RELEASE(&after_second);
           });
-    };
-    if (arena_)
-      arena_->execute(both);
-    else
-      both();
+    });
     CRUMPLE_TSAN_ACQUIRE(&after_first);
     CRUMPLE_TSAN_ACQUIRE(&after_second);
   }
@@ -155,6 +149,15 @@ class Parallel {
   }
 
  private:
+  /// Runs work() in the backend's arena (already inside it: at once), or in the caller's.
+  template <class Work>
+  void in_arena(const Work& work) const {
+    if (arena_)
+      arena_->execute(work);
+    else
+      work();
+  }
+
   int threads_ = 1;
   std::unique_ptr<tbb::task_arena> arena_;
 };

@@ -18,10 +18,13 @@ void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices);
 
 int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
   const int rounds = plan(sim, splits, stamps);
-  // Both follow from the acceptance alone and touch disjoint data (the lists' heads and pools;
-  // the free lists, plans and stamps), so the serial room runs beside the ids' parallel loop.
+  // Both follow from the acceptance alone and touch disjoint data (make_room: the tallies and
+  // the existing vertices' list heads and pools; take_ids: the free lists, ids, records, plans
+  // and stamps), so the serial room runs beside the ids' parallel loop. fit comes after both:
+  // it sizes the arrays for the slots take_ids took, and make_room needs none of them (a split's
+  // ends existed before the pass).
   sim.par_.invoke([&] { make_room(sim); }, [&] { take_ids(sim, stamps); });
-  sim.topo_.fit();  // the slots the plans took
+  sim.topo_.fit();
   // A list that outgrew its block during the rounds would have moved it to its pool's end from
   // two threads at once (list_spring's serial fallback): make_room must have given every list
   // its room. Two size tests a pass make that a loud failure rather than a rare race.

@@ -6,12 +6,12 @@ the vertex count summed) instead of totals and the final count; the seed not pas
 alike); a failing or missing binary accepted silently.
 """
 import os
-import stat
 import subprocess
-import tempfile
 import textwrap
 import unittest
 from pathlib import Path
+
+from fake_tools import FakeToolsCase
 
 ROOT = Path(__file__).resolve().parents[2]
 AB_STATS = ROOT / "scripts" / "ab_stats.sh"
@@ -34,18 +34,9 @@ FAKE = textwrap.dedent("""\
 """)
 
 
-class AbStatsScript(unittest.TestCase):
-    def setUp(self):
-        self.dir = tempfile.TemporaryDirectory()
-
-    def tearDown(self):
-        self.dir.cleanup()
-
+class AbStatsScript(FakeToolsCase):
     def fake(self, name, shift=0, fail=False):
-        path = os.path.join(self.dir.name, name)
-        Path(path).write_text(FAKE.format(shift=shift, fail=fail))
-        os.chmod(path, os.stat(path).st_mode | stat.S_IXUSR)
-        return path
+        return self.write_fake(name, FAKE.format(shift=shift, fail=fail))
 
     def run_script(self, a, b, seeds="4"):
         return subprocess.run(["bash", str(AB_STATS), a, b, seeds, "--", "--grid", "8"], capture_output=True,

@@ -143,7 +143,7 @@ TEST(Layout, ScratchCopyKeepsTheRoom) {
 // array its room and keeps its elements: within a relayout the edges' order is read by the next
 // phase. Catches a reserve that reallocates an array empty (a clear before it), which happens
 // when an array lacks room: a scratch never reserved, as here, or a mesh past its reserve.
-TEST(Layout, MakeResidentKeepsTheScratchsElements) {
+TEST(Layout, ClaimWholeKeepsTheScratchsElements) {
   const fast::FastSimulator sim(make_grid(16), Params{}, 1);
   fast::LayoutScratch s;
   s.eorder.resize(3);
@@ -367,30 +367,35 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
-// invoke runs each of its two jobs exactly once and returns only when both are done, a parallel
-// loop inside a job covering its range once (the topology pass's serial tails beside its
-// renewal loop, SplitRounds' room beside its ids). Catches a job skipped or run twice, a return
-// before a job has finished, and a nested loop that loses chunks inside the arena.
+// invoke runs each of its two jobs exactly once, in the backend's arena, and returns only when
+// both are done, a parallel loop inside a job covering its range once (the topology pass's
+// serial tails beside its renewal loop, SplitRounds' room beside its ids). Catches a job
+// skipped or run twice, jobs run outside the arena (on whatever threads TBB would pick), a
+// return before a job has finished, and a nested loop that loses chunks inside the arena.
 TEST(Parallel, InvokeRunsBothJobsOnceAndReturnsWhenBothAreDone) {
   for (int threads : {1, 2, 4}) {
     const fast::Parallel par(threads);
     constexpr int n = 100003;
     std::vector<std::atomic<int>> seen(static_cast<std::size_t>(n));
     std::vector<int> serial;
-    std::atomic<int> firsts{0}, seconds{0};
+    std::atomic<int> firsts{0}, seconds{0}, outside{0};
+    const auto in_arena = [&] { return threads == 1 || tbb::this_task_arena::max_concurrency() == threads; };
     par.invoke(
         [&] {
           ++firsts;
+          outside += !in_arena();
           for (int k = 0; k < 1000; ++k) serial.push_back(k);
         },
         [&] {
           ++seconds;
+          outside += !in_arena();
           par.run(n, 256, [&](int b, int e) {
             for (int k = b; k < e; ++k) ++seen[std::size_t(k)];
           });
         });
     EXPECT_EQ(firsts.load(), 1) << threads << " threads";
     EXPECT_EQ(seconds.load(), 1) << threads << " threads";
+    EXPECT_EQ(outside.load(), 0) << threads << " threads";
     ASSERT_EQ(serial.size(), 1000u) << threads << " threads";
     EXPECT_EQ(serial.back(), 999) << threads << " threads";
     int once = 0;
@@ -838,7 +843,7 @@ TEST(Layout, PhasesRunInConsecutiveSteps) {
 // An unbounded budget faults in the whole room of an array of any element size, one-byte ones
 // included (alive bytes, decisions). Catches a budget in elements that wraps around for them
 // (from + SIZE_MAX / 1), which touched nothing past keep_warm's eighth.
-TEST(Array, MakeResidentTouchesTheWholeRoomOfByteArrays) {
+TEST(Array, WarmToWithoutBudgetTouchesTheWholeRoomOfByteArrays) {
   fast::Array<std::uint8_t> bytes;
   bytes.reserve_warm(4 * fast::kHugePage);  // past a huge page: keep_warm warms an eighth only
   bytes.resize(1000);
@@ -982,7 +987,7 @@ void stop_before_the_edges_move(fast::FastSimulator& sim) {
 // relayout's scratch holds what the next phase reads) faults the scratch in and keeps the
 // order. Catches a call that skips the scratch within a relayout, and one that empties the
 // orders (the move would then not sort the edges, or break the topology); a reserve that
-// drops the elements only where room is lacking is Layout.MakeResidentKeepsTheScratchsElements'.
+// drops the elements only where room is lacking is Layout.ClaimWholeKeepsTheScratchsElements'.
 TEST(Resident, BetweenTheEdgesOrderAndTheirMoveKeepsTheOrder) {
   fast::FastSimulator sim(make_grid(128), paper_params(), 2);
   const fast::Topology& m = sim.topology();
