@@ -42,18 +42,26 @@ void append_live(It first, It last, std::vector<int>& out) {
     if (*first >= 0) out.push_back(*first);
 }
 
-/// The triangles changed by the accepted events of the current pass. Pass numbers, not flags:
-/// a new pass forgets the last one's marks without clearing an array the size of the mesh.
+/// The triangles changed by the accepted events of the current pass. A pass's tag, not a flag:
+/// a new pass forgets the last one's marks without clearing an array the size of the mesh. One
+/// byte a triangle, so that the stamps an event tests at random (a restore candidate's four)
+/// are a small array that stays in the caches; the tags cycle through 1-255, and the array is
+/// cleared once a cycle, before a tag comes round again.
 class TriangleStamps {
  public:
   void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
   void claim_whole(ColdClaims& claims) { claims.whole(stamp_); }
   /// Starts a pass: no triangle is changed yet.
-  void begin_pass() { ++pass_; }
+  void begin_pass() {
+    ++pass_;
+    tag_ = std::uint8_t(tag_ % kTags + 1);
+    if (tag_ == 1) std::fill(stamp_.begin(), stamp_.end(), std::uint8_t(0));
+  }
+  /// The pass's number: for per-vertex stamps that must never repeat.
   std::uint64_t pass() const { return pass_; }
   /// Triangle t (-1: none) was changed by an accepted event of this pass.
-  bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == pass_; }
+  bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == tag_; }
   /// Some triangle of `tris` (a split record's slots, say) was changed by this pass.
   template <class Range>
   bool any_touched(const Range& tris) const {
@@ -64,7 +72,7 @@ class TriangleStamps {
   void mark(int t) {
     if (t < 0) return;
     if (t >= int(stamp_.size())) cover(std::size_t(t) + 1);
-    stamp_[t] = pass_;
+    stamp_[t] = tag_;
   }
   /// Room for the stamps of the first `triangles` slots. Growing by an eighth at least keeps the
   /// growth's fill off the per-event path (a stamp of 0 is an untouched triangle, so slots past
@@ -73,11 +81,13 @@ class TriangleStamps {
     if (triangles > stamp_.size()) stamp_.resize(std::max(triangles, stamp_.size() + stamp_.size() / 8), 0);
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
-  const std::uint64_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
+  const std::uint8_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
 
  private:
-  Array<std::uint64_t> stamp_;  ///< pass that last changed each triangle
+  static constexpr int kTags = 255;  ///< 0 is no pass's tag
+  Array<std::uint8_t> stamp_;        ///< tag of the pass that last changed each triangle
   std::uint64_t pass_ = 0;
+  std::uint8_t tag_ = 0;
 };
 
 }  // namespace crumple::fast

@@ -12,32 +12,25 @@ constexpr int kWaveGrain = 32;          ///< waves are smaller than rounds, and 
 constexpr int kRestoreTestGrain = 128;  ///< a restore test reads a record and its triangles: more per item
 }  // namespace
 
-void RestoreWaves::reserve(std::size_t vertices) { claim_.reserve_warm(vertices); }
+void RestoreWaves::reserve(std::size_t vertices) { wave_last_.reserve_warm(vertices); }
 
-int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps) {
+int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
   pretest(sim, restores, stamps);
-  claim_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between waves
-  pending_.clear();
-  for (int k = 0; k < int(candidates_.size()); ++k)
-    if (candidates_[k].restorable) pending_.push_back(k);
-  freed_.clear();
+  wave_last_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between passes
+  const int waves = assign_waves();
   const Topology& m = sim.topo_;
-  for (int wave = 0; !pending_.empty(); ++wave) {
-    scan(restores, m, stamps, wave);
-    const std::size_t done = freed_.size();
-    freed_.resize(done + wave_.size());
-    sim.par_.run(int(wave_.size()), kWaveGrain, [&](int b, int e) {
-      for (int q = b; q < e; ++q) {
-        if (q + kNear < e) prefetch_restore(m, restores[wave_[q + kNear]]);
-        const int k = wave_[q];
-        freed_[done + q] = {k, sim.restore_edge_local(restores[k])};
+  freed_.resize(restorable_.size());
+  for (int w = 0; w < waves; ++w) {
+    const int first = start_[w], size = start_[w + 1] - first;
+    sim.par_.run(size, kWaveGrain, [&](int b, int e) {
+      for (int q = first + b; q < first + e; ++q) {
+        if (q + kNear < first + e) prefetch_restore(m, restores[restorable_[by_wave_[q + kNear]]]);
+        const int p = by_wave_[q], k = restorable_[p];
+        freed_[p] = {k, sim.restore_edge_local(restores[k])};
       }
     });
-    for (int v : claimed_) claim_[v] = 0;
-    large_waves_ += wave_.size() > std::size_t(kWaveGrain);
-    pending_.swap(next_);
+    large_waves_ += size > kWaveGrain;
   }
-  std::sort(freed_.begin(), freed_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return int(freed_.size());
 }
 
@@ -74,25 +67,37 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
   });
 }
 
-void RestoreWaves::scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps, int wave) {
-  next_.clear(), wave_.clear(), claimed_.clear();
-  for (std::size_t q = 0; q < pending_.size(); ++q) {
-    if (q + kFar < pending_.size())
-      for (int v : candidates_[pending_[q + kFar]].verts)
-        if (v >= 0) prefetch(&claim_[v]);
-    const int k = pending_[q];
-    const std::array<int, 5>& verts = candidates_[k].verts;
-    const bool waits = std::any_of(verts.begin(), verts.end(), [&](int v) { return v >= 0 && claim_[v]; });
-    for (int v : verts)
-      if (v >= 0 && !claim_[v]) claim_[v] = k + 1, claimed_.push_back(v);
-    if (waits) {
-      next_.push_back(k);
-      continue;
+// Serial, but it reads only the candidates' vertices and one int a vertex: the restores' records
+// were read by the parallel pretest.
+int RestoreWaves::assign_waves() {
+  restorable_.clear(), claimed_.clear();
+  for (int k = 0; k < int(candidates_.size()); ++k)
+    if (candidates_[k].restorable) restorable_.push_back(k);
+  int waves = 0;
+  for (std::size_t p = 0; p < restorable_.size(); ++p) {
+    if (p + kFar < restorable_.size())
+      for (int v : candidates_[restorable_[p + kFar]].verts)
+        if (v >= 0) prefetch(&wave_last_[v]);
+    Candidate& c = candidates_[restorable_[p]];
+    int wave = 0;  // one past the last wave at any of its vertices
+    for (int v : c.verts)
+      if (v >= 0) wave = std::max(wave, wave_last_[v]);
+    for (int v : c.verts) {
+      if (v < 0) continue;
+      if (!wave_last_[v]) claimed_.push_back(v);
+      wave_last_[v] = wave + 1;
     }
-    wave_.push_back(k);
-    candidates_[k].wave = wave;
-    for (int t : m.records[m.E[restores[k]].record].t) stamps.mark(t);
+    c.wave = wave;
+    waves = std::max(waves, wave + 1);
   }
+  for (int v : claimed_) wave_last_[v] = 0;
+  // The places by wave, in event order within each (a counting sort): start_[w] is wave w's first.
+  start_.assign(std::size_t(waves) + 2, 0);
+  for (int k : restorable_) ++start_[std::size_t(candidates_[k].wave) + 2];
+  for (int w = 2; w <= waves + 1; ++w) start_[w] += start_[w - 1];
+  by_wave_.resize(restorable_.size());
+  for (int p = 0; p < int(restorable_.size()); ++p) by_wave_[start_[std::size_t(candidates_[restorable_[p]].wave) + 1]++] = p;
+  return waves;
 }
 
 }  // namespace crumple::fast

@@ -5,11 +5,12 @@
 // a restorable candidate unrestorable or the other way round (D14 proves it; the serial
 // oracle, which tests each candidate at its turn, checks it in the tests). So exactly the
 // restorable candidates are applied, and the waves only keep their event order where they share
-// a vertex: a wave scans the pending restorable candidates in event order; one sharing a vertex
-// with an earlier one of the scan waits for the next wave (and claims its vertices, so that
-// later ones at them wait too); the others, vertex-disjoint, apply in parallel. Every vertex
-// sees its restores in event order, and the freed ids reach the free lists in event order after
-// the waves: the serial result, bit for bit.
+// a vertex: one serial scan in event order gives each restorable candidate the wave after the
+// last wave of an earlier one sharing a vertex (the split rounds' rule), so the restores of a
+// wave are vertex-disjoint and apply in parallel. Every vertex sees its restores in event order,
+// and the freed ids reach the free lists in event order after the waves: the serial result, bit
+// for bit. (The restores' triangles are not stamped: the answers are known, and no later event
+// of the pass reads the stamps.)
 #pragma once
 
 #include <array>
@@ -30,11 +31,10 @@ class RestoreWaves {
   /// Room for the per-vertex scratch of a mesh of this many vertex slots.
   void reserve(std::size_t vertices);
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
-  void claim_whole(ColdClaims& claims) { claims.whole(claim_); }
+  void claim_whole(ColdClaims& claims) { claims.whole(wave_last_); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
-  /// splits, marking the triangles each accepted restore changes in `stamps`. Returns the
-  /// restores applied. Their ids stay taken until free_ids().
-  int apply(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps);
+  /// splits, whose changed triangles `stamps` holds. Returns the restores applied. Their ids stay taken until free_ids().
+  int apply(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
   /// Puts what the last apply() freed on m's free lists, in event order (Topology::free_ids).
   void free_ids(Topology& m) const;
   /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
@@ -53,19 +53,21 @@ class RestoreWaves {
   struct Candidate {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
     bool restorable;           ///< on the state after the pass's splits, and so through the pass
-    int wave;                  ///< the wave that applied it (set when applied)
+    int wave;                  ///< its wave, 0 first (restorable candidates)
   };
   /// Every candidate's vertices and answer, on the state after the pass's splits.
   void pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
-  /// One wave's serial scan of pending_ (restorable candidates): fills wave_ and next_, claims
-  /// and stamps.
-  void scan(const std::vector<int>& restores, const Topology& m, TriangleStamps& stamps, int wave);
+  /// Each restorable candidate's wave, serially in event order (the class comment); fills
+  /// restorable_ and by_wave_. Returns the number of waves.
+  int assign_waves();
 
-  Array<int> claim_;  ///< per vertex slot: 1 + the candidate claiming it in a wave (0 between waves)
+  Array<int> wave_last_;  ///< per vertex slot: 1 + the last wave assigned at it (0 between passes)
   // Per pass, kept so that a pass allocates (and faults in) no memory.
-  std::vector<Candidate> candidates_;                 ///< per restore event
-  std::vector<int> pending_, next_, wave_, claimed_;  ///< candidates by wave; vertices claimed
-  std::vector<std::pair<int, Freed>> freed_;          ///< per accepted restore: what it freed
+  std::vector<Candidate> candidates_;  ///< per restore event
+  std::vector<int> restorable_;        ///< the restorable candidates, in event order
+  std::vector<int> by_wave_, start_;   ///< places in restorable_ by wave; each wave's first
+  std::vector<int> claimed_;           ///< the vertices of the pass's restores
+  std::vector<std::pair<int, Freed>> freed_;  ///< per restorable candidate (event order): what it freed
   std::uint64_t large_waves_ = 0;
 };
 

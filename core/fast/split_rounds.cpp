@@ -61,7 +61,7 @@ int SplitRounds::accept(TriangleStamps& stamps) {
     if (k + kNear < candidates_.size()) {
       const SplitCandidate& f = candidates_[k + kNear];
       for (int t : f.tris)
-        if (const std::uint64_t* line = stamps.line_of(t)) prefetch(line);
+        if (const std::uint8_t* line = stamps.line_of(t)) prefetch(line);
       for (int v : f.ends)
         if (v >= 0) prefetch(&tally_[v]);
     }

@@ -367,6 +367,26 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
+// A triangle's mark holds for its pass alone, over many more passes than there are tags (the
+// stamps are one byte: tags cycle): a mark of the first pass must not read as one when its tag
+// comes round again, and a triangle never marked never reads as marked. Catches a cycle without
+// the clear, a tag of 0 (the value of a stamp never written), and a mark that lasts a pass.
+TEST(TriangleStamps, AMarkHoldsForItsPassAloneThroughTheTagsCycles) {
+  fast::TriangleStamps s;
+  s.begin_pass();
+  s.cover(1000);
+  s.mark(7);
+  EXPECT_TRUE(s.touched(7));
+  for (int pass = 1; pass <= 1000; ++pass) {
+    s.begin_pass();
+    ASSERT_FALSE(s.touched(7)) << "pass " << pass;
+    ASSERT_FALSE(s.touched(500)) << "pass " << pass;
+    ASSERT_FALSE(s.touched(8)) << "pass " << pass;
+    s.mark(8);
+    ASSERT_TRUE(s.touched(8)) << "pass " << pass;
+  }
+}
+
 // invoke runs each of its two jobs exactly once, in the backend's arena, and returns only when
 // both are done, a parallel loop inside a job covering its range once (the topology pass's
 // serial tails beside its renewal loop, SplitRounds' room beside its ids). Catches a job
