@@ -42,6 +42,20 @@ void append_live(It first, It last, std::vector<int>& out) {
     if (*first >= 0) out.push_back(*first);
 }
 
+/// Orders the items 0..n-1 by group (group(k) in [0, groups)), in item order within a group
+/// (a counting sort): the rounds and waves of the topology pass, in event order within each.
+/// order gets the items; group g's are order[first[g], first[g + 1]).
+template <class Group>
+void order_by_group(int n, int groups, Group group, std::vector<int>& first, std::vector<int>& order) {
+  first.assign(std::size_t(groups) + 2, 0);
+  for (int k = 0; k < n; ++k) ++first[std::size_t(group(k)) + 2];
+  for (int g = 2; g <= groups + 1; ++g) first[g] += first[g - 1];
+  order.resize(std::size_t(n));
+  // first[g + 1] is group g's fill position here, and its end (group g + 1's first) after.
+  for (int k = 0; k < n; ++k) order[first[std::size_t(group(k)) + 1]++] = k;
+  first.pop_back();
+}
+
 /// The triangles changed by the accepted events of the current pass. A pass's tag, not a flag:
 /// a new pass forgets the last one's marks without clearing an array the size of the mesh. One
 /// byte a triangle, so that the stamps an event tests at random (a restore candidate's four)

@@ -91,12 +91,7 @@ int RestoreWaves::assign_waves() {
     waves = std::max(waves, wave + 1);
   }
   for (int v : claimed_) wave_last_[v] = 0;
-  // The places by wave, in event order within each (a counting sort): start_[w] is wave w's first.
-  start_.assign(std::size_t(waves) + 2, 0);
-  for (int k : restorable_) ++start_[std::size_t(candidates_[k].wave) + 2];
-  for (int w = 2; w <= waves + 1; ++w) start_[w] += start_[w - 1];
-  by_wave_.resize(restorable_.size());
-  for (int p = 0; p < int(restorable_.size()); ++p) by_wave_[start_[std::size_t(candidates_[restorable_[p]].wave) + 1]++] = p;
+  order_by_group(int(restorable_.size()), waves, [&](int p) { return candidates_[restorable_[p]].wave; }, start_, by_wave_);
   return waves;
 }
 

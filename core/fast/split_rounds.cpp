@@ -151,12 +151,7 @@ std::vector<SplitRounds::Applied> SplitRounds::applied() const {
 // The rounds, each a parallel loop over its splits (in event order within the round).
 int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
   const Topology& m = sim.topo_;
-  by_round_.resize(plans_.size());
-  start_.assign(std::size_t(rounds) + 2, 0);
-  for (int r : round_of_) ++start_[r + 1];
-  for (int r = 1; r <= rounds; ++r) start_[r + 1] += start_[r];
-  fill_.assign(start_.begin(), start_.end());
-  for (std::size_t k = 0; k < plans_.size(); ++k) by_round_[fill_[round_of_[k]]++] = int(k);
+  order_by_group(int(plans_.size()), rounds + 1, [&](int k) { return round_of_[k]; }, start_, by_round_);  // rounds from 1
   applied_.assign(plans_.size(), 0);
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start_[r + 1] - start_[r] > kRoundGrain;

@@ -71,7 +71,7 @@ class SplitRounds {
   std::vector<SplitPlan> plans_;             ///< accepted splits, in event order
   std::vector<int> round_of_;                ///< per plan
   std::vector<int> involved_;                ///< vertices of accepted splits (i, j, l, r), once each
-  std::vector<int> by_round_, start_, fill_; ///< plans sorted by round, each round's first
+  std::vector<int> by_round_, start_;        ///< plans sorted by round, each round's first
   std::vector<std::uint8_t> applied_;        ///< per plan
   std::uint64_t large_rounds_ = 0;
 };

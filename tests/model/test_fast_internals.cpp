@@ -367,6 +367,21 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
+// The rounds' and waves' grouping: every item once, groups in order, item order within a group,
+// each group's range at first[g]..first[g + 1], and an empty group (the splits' round 0, a round
+// no split reached) an empty range. Catches an unstable fill, ranges off by one group, and a
+// first that runs past the last group's end.
+TEST(OrderByGroup, GroupsInOrderItemsInOrderWithinEach) {
+  const std::vector<int> group_of{2, 0, 3, 2, 0, 3, 3, 2};
+  std::vector<int> first{7, 7}, order{9};
+  fast::order_by_group(int(group_of.size()), 4, [&](int k) { return group_of[std::size_t(k)]; }, first, order);
+  EXPECT_EQ(order, (std::vector<int>{1, 4, 0, 3, 7, 2, 5, 6}));
+  EXPECT_EQ(first, (std::vector<int>{0, 2, 2, 5, 8}));
+  fast::order_by_group(0, 0, [](int) { return 0; }, first, order);
+  EXPECT_TRUE(order.empty());
+  EXPECT_EQ(first, (std::vector<int>{0}));
+}
+
 // A triangle's mark holds for its pass alone, over many more passes than there are tags (the
 // stamps are one byte: tags cycle): a mark of the first pass must not read as one when its tag
 // comes round again, and a triangle never marked never reads as marked. Catches a cycle without
