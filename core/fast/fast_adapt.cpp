@@ -200,13 +200,13 @@ void FastSimulator::renew_normals() {
 // their own compact records rather than read back from each changed triangle (serial: a test a
 // vertex, where a parallel claim would cost an atomic exchange).
 void FastSimulator::collect_renewed_vertices() {
-  const std::uint64_t pass = stamps_.pass();
-  vertex_stamp_.resize(std::size_t(topo_.V.size()), 0);
+  vertex_stamps_.begin_pass();
+  vertex_stamps_.cover(std::size_t(topo_.V.size()));
   renewed_.clear();
   for (std::size_t k = 0; k < touched_.size(); ++k) {
-    if (k + kNear < touched_.size()) prefetch(&vertex_stamp_[touched_[k + kNear]]);
+    if (k + kNear < touched_.size()) prefetch(vertex_stamps_.line_of(touched_[k + kNear]));
     const int v = touched_[k];
-    if (vertex_stamp_[v] != pass) vertex_stamp_[v] = pass, renewed_.push_back(v);
+    if (!vertex_stamps_.touched(v)) vertex_stamps_.mark(v), renewed_.push_back(v);
   }
 }
 

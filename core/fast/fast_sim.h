@@ -188,7 +188,6 @@ class FastSimulator final : public Simulator {
   // Per-element scratch of the topology pass, in Arrays like the topology's (a copy keeps their
   // room, growth is faulted in ahead: D16), reserved with it in the constructor.
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
-  Array<std::uint64_t> vertex_stamp_;     ///< pass that last renewed each vertex normal
   std::vector<int> renewed_;              ///< the vertices whose normals this pass renews
   std::vector<int> touched_;              ///< the applied events' vertices, in event order (repeats)
   /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
@@ -201,7 +200,8 @@ class FastSimulator final : public Simulator {
     std::vector<int> splits, restores;              ///< event slots in event order
   };
   EventLists events_;
-  TriangleStamps stamps_;                 ///< the triangles this pass's events changed
+  PassStamps stamps_;                     ///< the triangles this pass's events changed
+  PassStamps vertex_stamps_;              ///< the vertices whose normals this pass renews
   SplitRounds rounds_;                    ///< the splits' unit, with its scratch
   RestoreWaves waves_;                    ///< the restores' unit, with its scratch
   StepScratch step_;                      ///< the physics step's rows, records, forces and guesses

@@ -56,51 +56,48 @@ void order_by_group(int n, int groups, Group group, std::vector<int>& first, std
   first.pop_back();
 }
 
-/// The triangles changed by the accepted events of the current pass. A pass's tag, not a flag:
-/// a new pass forgets the last one's marks without clearing an array the size of the mesh. One
-/// byte a triangle, so that the stamps an event tests at random (a restore candidate's four)
-/// are a small array that stays in the caches; the tags cycle through 1-255, and the array is
-/// cleared once a cycle, before a tag comes round again.
-class TriangleStamps {
+/// The elements a pass has marked: the triangles its accepted events changed, the vertices
+/// whose normals it renews. A pass's tag, not a flag: a new pass forgets the last one's marks
+/// without clearing an array the size of the mesh. One byte an element, so that the stamps read
+/// at random (a restore candidate's four triangles, an event's vertices) are a small array that
+/// stays in the caches; the tags cycle through 1-255, and the array is cleared once a cycle,
+/// before a tag comes round again.
+class PassStamps {
  public:
-  void reserve(std::size_t triangles) { stamp_.reserve_warm(triangles); }
+  void reserve(std::size_t elements) { stamp_.reserve_warm(elements); }
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
   void claim_whole(ColdClaims& claims) { claims.whole(stamp_); }
-  /// Starts a pass: no triangle is changed yet.
+  /// Starts a pass: nothing is marked yet.
   void begin_pass() {
-    ++pass_;
     tag_ = std::uint8_t(tag_ % kTags + 1);
     if (tag_ == 1) std::fill(stamp_.begin(), stamp_.end(), std::uint8_t(0));
   }
-  /// The pass's number: for per-vertex stamps that must never repeat.
-  std::uint64_t pass() const { return pass_; }
-  /// Triangle t (-1: none) was changed by an accepted event of this pass.
+  /// Element t (-1: none) was marked by this pass.
   bool touched(int t) const { return t >= 0 && t < int(stamp_.size()) && stamp_[t] == tag_; }
   /// Some triangle of `tris` (a split record's slots, say) was changed by this pass.
   template <class Range>
   bool any_touched(const Range& tris) const {
     return std::any_of(std::begin(tris), std::end(tris), [this](int t) { return touched(t); });
   }
-  /// Marks triangle t (-1: none) changed by this pass. Serial, but for triangles below cover()'s
-  /// count, which distinct events may mark in parallel (one stamp each, no growth).
+  /// Marks element t (-1: none) for this pass. Serial, but for elements below cover()'s count,
+  /// which distinct events may mark in parallel (one stamp each, no growth).
   void mark(int t) {
     if (t < 0) return;
     if (t >= int(stamp_.size())) cover(std::size_t(t) + 1);
     stamp_[t] = tag_;
   }
-  /// Room for the stamps of the first `triangles` slots. Growing by an eighth at least keeps the
-  /// growth's fill off the per-event path (a stamp of 0 is an untouched triangle, so slots past
+  /// Room for the stamps of the first `elements` slots. Growing by an eighth at least keeps the
+  /// growth's fill off the per-event path (a stamp of 0 is an unmarked element, so slots past
   /// the mesh's are harmless).
-  void cover(std::size_t triangles) {
-    if (triangles > stamp_.size()) stamp_.resize(std::max(triangles, stamp_.size() + stamp_.size() / 8), 0);
+  void cover(std::size_t elements) {
+    if (elements > stamp_.size()) stamp_.resize(std::max(elements, stamp_.size() + stamp_.size() / 8), 0);
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
   const std::uint8_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
 
  private:
   static constexpr int kTags = 255;  ///< 0 is no pass's tag
-  Array<std::uint8_t> stamp_;        ///< tag of the pass that last changed each triangle
-  std::uint64_t pass_ = 0;
+  Array<std::uint8_t> stamp_;        ///< tag of the pass that last marked each element
   std::uint8_t tag_ = 0;
 };
 

@@ -14,7 +14,7 @@ constexpr int kRestoreTestGrain = 128;  ///< a restore test reads a record and i
 
 void RestoreWaves::reserve(std::size_t vertices) { wave_last_.reserve_warm(vertices); }
 
-int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
+int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps) {
   pretest(sim, restores, stamps);
   wave_last_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between passes
   const int waves = assign_waves();
@@ -54,7 +54,7 @@ std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {
 // Every candidate's answer on the state after the splits, in parallel: restorable unless an
 // accepted split of the pass changed a triangle of its record (the splits' stamps) or
 // can_restore says no. No restore of the pass changes it (the class comment).
-void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps) {
+void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps) {
   const Topology& m = sim.topo_;
   const int nr = int(restores.size());
   candidates_.resize(std::size_t(nr));

@@ -34,7 +34,7 @@ class RestoreWaves {
   void claim_whole(ColdClaims& claims) { claims.whole(wave_last_); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
   /// splits, whose changed triangles `stamps` holds. Returns the restores applied. Their ids stay taken until free_ids().
-  int apply(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
+  int apply(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps);
   /// Puts what the last apply() freed on m's free lists, in event order (Topology::free_ids).
   void free_ids(Topology& m) const;
   /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
@@ -56,7 +56,7 @@ class RestoreWaves {
     int wave;                  ///< its wave, 0 first (restorable candidates)
   };
   /// Every candidate's vertices and answer, on the state after the pass's splits.
-  void pretest(FastSimulator& sim, const std::vector<int>& restores, const TriangleStamps& stamps);
+  void pretest(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps);
   /// Each restorable candidate's wave, serially in event order (the class comment); fills
   /// restorable_ and by_wave_. Returns the number of waves.
   int assign_waves();

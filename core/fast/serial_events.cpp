@@ -4,7 +4,7 @@
 
 namespace crumple::fast {
 
-int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps, std::vector<int>& touched) {
+int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps, std::vector<int>& touched) {
   const Topology& m = sim.topo_;
   int done = 0;
   for (int e : splits) {
@@ -19,7 +19,7 @@ int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, Tri
   return done;
 }
 
-int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps,
+int SerialEvents::restores(FastSimulator& sim, const std::vector<int>& restores, PassStamps& stamps,
                            std::vector<int>& touched) {
   const Topology& m = sim.topo_;
   int done = 0;

@@ -15,10 +15,10 @@ class FastSimulator;
 struct SerialEvents {
   /// Splits (edge slots, in event order) one after the other, appending each applied split's
   /// live vertices (i, j, l, r, n) to `touched`; returns the splits applied.
-  static int splits(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps, std::vector<int>& touched);
+  static int splits(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps, std::vector<int>& touched);
   /// Restores (edge slots, in event order) one after the other, appending each applied
   /// restore's live vertices (i, j, l, r) to `touched`; returns the restores applied.
-  static int restores(FastSimulator& sim, const std::vector<int>& restores, TriangleStamps& stamps,
+  static int restores(FastSimulator& sim, const std::vector<int>& restores, PassStamps& stamps,
                       std::vector<int>& touched);
 };
 

@@ -16,7 +16,7 @@ constexpr int kTakeGrain = 512;       ///< a plan's takes miss a line or two (th
 
 void SplitRounds::reserve(std::size_t vertices) { tally_.reserve_warm(vertices); }
 
-int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
+int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps) {
   const int rounds = plan(sim, splits, stamps);
   // Both follow from the acceptance alone and touch disjoint data (make_room: the tallies and
   // the existing vertices' list heads and pools; take_ids: the free lists, ids, records, plans
@@ -40,7 +40,7 @@ int SplitRounds::apply(FastSimulator& sim, const std::vector<int>& splits, Trian
 // array, the stamps and the rounds; it counts the ids each accepted split takes, so that the
 // plans can look theirs up in parallel and take them all at once after (take_ids). Returns the
 // number of rounds.
-int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps) {
+int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps) {
   const Topology& m = sim.topo_;
   tally_.resize(std::size_t(m.V.size()), Tally{});
   accepted_.clear(), round_of_.clear(), involved_.clear();
@@ -55,7 +55,7 @@ int SplitRounds::plan(FastSimulator& sim, const std::vector<int>& splits, Triang
 }
 
 // Acceptance (D13) and rounds, serially in event order.
-int SplitRounds::accept(TriangleStamps& stamps) {
+int SplitRounds::accept(PassStamps& stamps) {
   int rounds = 0, edges = 0, tris = 0;
   for (std::size_t k = 0; k < candidates_.size(); ++k) {
     if (k + kNear < candidates_.size()) {
@@ -97,7 +97,7 @@ int SplitRounds::accept(TriangleStamps& stamps) {
 // The accepted splits' plans, in parallel: each looks its new ids up at its place in the pass's
 // takes, and marks its new triangles (slots no candidate of the pass had, so the acceptance did
 // not read their stamps); then every id is taken at once.
-void SplitRounds::take_ids(FastSimulator& sim, TriangleStamps& stamps) {
+void SplitRounds::take_ids(FastSimulator& sim, PassStamps& stamps) {
   Topology& m = sim.topo_;
   const int n = int(accepted_.size());
   plans_.resize(accepted_.size());

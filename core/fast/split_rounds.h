@@ -28,7 +28,7 @@ class SplitRounds {
   void claim_whole(ColdClaims& claims) { claims.whole(tally_); }
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
   /// each accepted split changes in `stamps`. Returns the splits applied.
-  int apply(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
+  int apply(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps);
   /// Appends the live vertices (i, j, l, r, n) of each split the last apply() applied.
   void touched(std::vector<int>& out) const;
   /// Rounds so far large enough to run as a parallel loop (tests check they happened).
@@ -42,9 +42,9 @@ class SplitRounds {
   std::vector<Applied> applied() const;
 
  private:
-  int plan(FastSimulator& sim, const std::vector<int>& splits, TriangleStamps& stamps);
-  int accept(TriangleStamps& stamps);
-  void take_ids(FastSimulator& sim, TriangleStamps& stamps);
+  int plan(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps);
+  int accept(PassStamps& stamps);
+  void take_ids(FastSimulator& sim, PassStamps& stamps);
   void make_room(FastSimulator& sim);
   int run_rounds(FastSimulator& sim, int rounds);
 

@@ -386,8 +386,8 @@ TEST(OrderByGroup, GroupsInOrderItemsInOrderWithinEach) {
 // stamps are one byte: tags cycle): a mark of the first pass must not read as one when its tag
 // comes round again, and a triangle never marked never reads as marked. Catches a cycle without
 // the clear, a tag of 0 (the value of a stamp never written), and a mark that lasts a pass.
-TEST(TriangleStamps, AMarkHoldsForItsPassAloneThroughTheTagsCycles) {
-  fast::TriangleStamps s;
+TEST(PassStamps, AMarkHoldsForItsPassAloneThroughTheTagsCycles) {
+  fast::PassStamps s;
   s.begin_pass();
   s.cover(1000);
   s.mark(7);
