@@ -6,11 +6,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstring>
-
-#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
-#include <immintrin.h>
-#endif
 
 #include "fast/event_prefetch.h"
 #include "fast/fast_sim.h"
@@ -28,39 +23,8 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 /// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
 constexpr int kTestBlock = 4096;
 static_assert(kTestBlock % Parallel::kLanes == 0);
-constexpr int kRenewGrain = 512;  ///< a normal per vertex: far less than an event
-
-constexpr int kSkip = 64;  ///< decisions tested at once: one line
-
-/// Whether the kSkip bytes at p are all 0.
-inline bool all_zero(const std::uint8_t* p) {
-#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
-  const __m256i lo = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
-  const __m256i hi = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32));
-  const __m256i any = _mm256_or_si256(lo, hi);
-  return _mm256_testz_si256(any, any);
-#else
-  std::uint64_t w[kSkip / 8];
-  std::memcpy(w, p, sizeof w);
-  std::uint64_t any = 0;
-  for (std::uint64_t x : w) any |= x;
-  return any == 0;
-#endif
-}
-
-/// Calls f(k) for each nonzero byte k of bytes[begin, end), in order. Nearly all decisions are
-/// 0 (a few events among hundreds of thousands of edges): a line of them is tested at once.
-template <class F>
-void for_each_nonzero(const std::uint8_t* bytes, int begin, int end, F&& f) {
-  for (int k = begin; k < end;) {
-    if (k + kSkip <= end && all_zero(bytes + k)) {
-      k += kSkip;
-      continue;
-    }
-    for (const int last = std::min(end, k + kSkip); k < last; ++k)
-      if (bytes[k]) f(k);
-  }
-}
+/// The renewal scans every vertex's stamp for the few it renews: chunks of many slots.
+constexpr int kRenewGrain = 8192;
 
 /// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
 /// digit radix passes (radix.h) between keys and spare: a few streaming passes where a
@@ -110,7 +74,7 @@ void FastSimulator::list_events(int b, int begin, int end) {
   std::vector<std::uint64_t>& restores = events_.found[2 * std::size_t(b) + 1];
   splits.clear(), restores.clear();
   const std::int32_t* lid = topo_.E.lid.data();
-  for_each_nonzero(decisions_.data(), begin, end, [&](int e) {
+  for_each_byte<false>(decisions_.data(), 0, begin, end, [&](int e) {
     const std::uint64_t key = std::uint64_t(std::uint32_t(lid[e])) << 32 | std::uint32_t(e);
     (decisions_[e] == 1 ? splits : restores).push_back(key);
   });
@@ -180,33 +144,27 @@ void FastSimulator::renew_normals() {
   // next step need not recompute them all: the normal of each corner of a live changed triangle,
   // once (each normal is a function of the areas alone, so the order changes nothing). The
   // changed triangles' areas are current: each split and restore computed its own.
-  const Vertices& V = topo_.V;
-  collect_renewed_vertices();
-  // Prefetched kNear on: the vertex's list head and its list (not the areas the list names:
-  // prefetching them too made the renewal slower, docs/PERFORMANCE.md).
-  const std::vector<int>& verts = renewed_;
+  mark_renewed_vertices();
+  // In slot order, a scan of the stamps: the layout keeps a vertex's list and its triangles'
+  // areas near its neighbours' (layout.h), so the renewed vertices share lines that in event
+  // order each would miss alone.
   Float4* normals = topo_.V.nr.data();
-  par_.run(int(verts.size()), kRenewGrain, [&](int b, int e) {
-    for (int k = b; k < e; ++k) {
-      if (k + kNear < e) prefetch_read(&V.tri_list[verts[k + kNear]]), prefetch_read(topo_.tris_of(verts[k + kNear]));
-      vertex_normals(topo_, normals, verts[k], verts[k] + 1);
-    }
+  par_.run(topo_.V.size(), kRenewGrain, [&](int b, int e) {
+    vertex_stamps_.for_each_marked(b, e, [&](int v) { vertex_normals(topo_, normals, v, v + 1); });
   });
   normals_valid_ = true;
 }
 
-// The vertices of the pass's applied events, each once: the corners of its live changed
-// triangles (a split's i, j, l, r and n; a restore's i, j, l, r), listed by the events from
-// their own compact records rather than read back from each changed triangle (serial: a test a
-// vertex, where a parallel claim would cost an atomic exchange).
-void FastSimulator::collect_renewed_vertices() {
+// The vertices of the pass's applied events: the corners of its live changed triangles (a
+// split's i, j, l, r and n; a restore's i, j, l, r), listed by the events from their own compact
+// records rather than read back from each changed triangle, marked in the vertex stamps
+// (serial: a vertex of several events is marked by each, where a parallel mark would race).
+void FastSimulator::mark_renewed_vertices() {
   vertex_stamps_.begin_pass();
   vertex_stamps_.cover(std::size_t(topo_.V.size()));
-  renewed_.clear();
   for (std::size_t k = 0; k < touched_.size(); ++k) {
     if (k + kNear < touched_.size()) prefetch(vertex_stamps_.line_of(touched_[k + kNear]));
-    const int v = touched_[k];
-    if (!vertex_stamps_.touched(v)) vertex_stamps_.mark(v), renewed_.push_back(v);
+    vertex_stamps_.mark(touched_[k]);
   }
 }
 

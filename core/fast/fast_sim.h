@@ -159,7 +159,7 @@ class FastSimulator final : public Simulator {
   void collect_events();
   void list_event_ids(StepEvents& ev) const;
   void renew_normals();
-  void collect_renewed_vertices();
+  void mark_renewed_vertices();
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
   double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
   // One event's edits (fast_edits.cpp).
@@ -188,7 +188,6 @@ class FastSimulator final : public Simulator {
   // Per-element scratch of the topology pass, in Arrays like the topology's (a copy keeps their
   // room, growth is faulted in ahead: D16), reserved with it in the constructor.
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
-  std::vector<int> renewed_;              ///< the vertices whose normals this pass renews
   std::vector<int> touched_;              ///< the applied events' vertices, in event order (repeats)
   /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
   /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.

@@ -6,9 +6,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <iterator>
 #include <vector>
+
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+#include <immintrin.h>
+#endif
 
 #include "fast/aligned.h"
 
@@ -40,6 +45,38 @@ template <class It>
 void append_live(It first, It last, std::vector<int>& out) {
   for (; first != last; ++first)
     if (*first >= 0) out.push_back(*first);
+}
+
+constexpr int kByteLine = 64;  ///< bytes a scan tests at once: one cache line
+
+/// Bit k set where p[k] == value, for the kByteLine bytes at p.
+inline std::uint64_t bytes_equal(const std::uint8_t* p, std::uint8_t value) {
+#if defined(__AVX2__) && !CRUMPLE_DISABLE_SIMD
+  const __m256i v = _mm256_set1_epi8(char(value));
+  const __m256i lo = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p));
+  const __m256i hi = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + 32));
+  const std::uint32_t mlo = std::uint32_t(_mm256_movemask_epi8(_mm256_cmpeq_epi8(lo, v)));
+  const std::uint32_t mhi = std::uint32_t(_mm256_movemask_epi8(_mm256_cmpeq_epi8(hi, v)));
+  return std::uint64_t(mhi) << 32 | mlo;
+#else
+  std::uint64_t mask = 0;
+  for (int k = 0; k < kByteLine; ++k) mask |= std::uint64_t(p[k] == value) << k;
+  return mask;
+#endif
+}
+
+/// Calls f(k), in order, for each k in [begin, end) where bytes[k] == value (equal) or
+/// bytes[k] != value (!equal). The bytes sought are few (a pass's events among every edge, its
+/// renewed normals among every vertex): a line of bytes is tested at once, and only its matches
+/// are visited.
+template <bool equal, class F>
+void for_each_byte(const std::uint8_t* bytes, std::uint8_t value, int begin, int end, F&& f) {
+  int k = begin;
+  for (; k + kByteLine <= end; k += kByteLine)
+    for (std::uint64_t m = equal ? bytes_equal(bytes + k, value) : ~bytes_equal(bytes + k, value); m; m &= m - 1)
+      f(k + std::countr_zero(m));
+  for (; k < end; ++k)
+    if ((bytes[k] == value) == equal) f(k);
 }
 
 /// Orders the items 0..n-1 by group (group(k) in [0, groups)), in item order within a group
@@ -91,6 +128,11 @@ class PassStamps {
   /// the mesh's are harmless).
   void cover(std::size_t elements) {
     if (elements > stamp_.size()) stamp_.resize(std::max(elements, stamp_.size() + stamp_.size() / 8), 0);
+  }
+  /// Calls f(t), in order, for each element t in [begin, end) marked by this pass.
+  template <class F>
+  void for_each_marked(int begin, int end, F&& f) const {
+    for_each_byte<true>(stamp_.data(), tag_, begin, std::min(end, int(stamp_.size())), f);
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
   const std::uint8_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }
