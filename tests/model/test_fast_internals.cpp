@@ -367,6 +367,25 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
+// The byte scan of the decisions' listing and the normal renewal, against a plain loop, over
+// ranges that start and end inside a line and across lines, for both senses. Catches halves of
+// a line's mask swapped, a match past bit 31 lost, a tail left unvisited, a range's start
+// rounded to its line.
+TEST(ForEachByte, VisitsTheMatchesOfAnyRangeInOrder) {
+  std::vector<std::uint8_t> bytes(300, 0);
+  for (std::size_t k = 0; k < bytes.size(); ++k)
+    if (k % 7 == 3 || k % 64 == 63 || k % 64 == 32 || k == 31) bytes[k] = std::uint8_t(1 + k % 3);
+  for (auto [begin, end] : {std::pair{0, 300}, {5, 290}, {64, 128}, {33, 97}, {100, 100}, {250, 300}})
+    for (std::uint8_t value : {std::uint8_t(0), std::uint8_t(2)}) {
+      std::vector<int> want_equal, want_other, got_equal, got_other;
+      for (int k = begin; k < end; ++k) (bytes[std::size_t(k)] == value ? want_equal : want_other).push_back(k);
+      fast::for_each_byte<true>(bytes.data(), value, begin, end, [&](int k) { got_equal.push_back(k); });
+      fast::for_each_byte<false>(bytes.data(), value, begin, end, [&](int k) { got_other.push_back(k); });
+      EXPECT_EQ(got_equal, want_equal) << begin << ".." << end << " value " << int(value);
+      EXPECT_EQ(got_other, want_other) << begin << ".." << end << " value " << int(value);
+    }
+}
+
 // The rounds' and waves' grouping: every item once, groups in order, item order within a group,
 // each group's range at first[g]..first[g + 1], and an empty group (the splits' round 0, a round
 // no split reached) an empty range. Catches an unstable fill, ranges off by one group, and a
