@@ -23,8 +23,10 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 /// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
 constexpr int kTestBlock = 4096;
 static_assert(kTestBlock % Parallel::kLanes == 0);
-/// The renewal scans every vertex's stamp for the few it renews: chunks of many slots.
+/// The renewal scans every vertex's stamp for the few it renews: chunks of many slots, each
+/// in parts of kRenewPart slots whose marked vertices are listed on the stack.
 constexpr int kRenewGrain = 8192;
+constexpr int kRenewPart = 512;
 
 /// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
 /// digit radix passes (radix.h) between keys and spare: a few streaming passes where a
@@ -147,10 +149,21 @@ void FastSimulator::renew_normals() {
   mark_renewed_vertices();
   // In slot order, a scan of the stamps: the layout keeps a vertex's list and its triangles'
   // areas near its neighbours' (layout.h), so the renewed vertices share lines that in event
-  // order each would miss alone.
+  // order each would miss alone. A part's marked vertices are listed first, so that the loop
+  // can prefetch kNear on: the vertex's list head and its list (not the areas the list names:
+  // prefetching them too made the renewal slower, docs/PERFORMANCE.md).
+  const Vertices& V = topo_.V;
   Float4* normals = topo_.V.nr.data();
-  par_.run(topo_.V.size(), kRenewGrain, [&](int b, int e) {
-    vertex_stamps_.for_each_marked(b, e, [&](int v) { vertex_normals(topo_, normals, v, v + 1); });
+  par_.run(V.size(), kRenewGrain, [&](int b, int e) {
+    int marked[kRenewPart];
+    for (int first = b; first < e; first += kRenewPart) {
+      int n = 0;
+      vertex_stamps_.for_each_marked(first, std::min(e, first + kRenewPart), [&](int v) { marked[n++] = v; });
+      for (int k = 0; k < n; ++k) {
+        if (k + kNear < n) prefetch_read(&V.tri_list[marked[k + kNear]]), prefetch_read(topo_.tris_of(marked[k + kNear]));
+        vertex_normals(topo_, normals, marked[k], marked[k] + 1);
+      }
+    }
   });
   normals_valid_ = true;
 }
