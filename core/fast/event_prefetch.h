@@ -4,6 +4,8 @@
 // ahead: the first lines (the edge, the record); kNear ahead: what those lines point to.
 #pragma once
 
+#include <array>
+
 #include "fast/topology.h"
 
 namespace crumple::fast {
@@ -39,15 +41,15 @@ inline void prefetch_triangle(const Topology& m, int t) {
   const char* record = reinterpret_cast<const char*>(&T[t]);  // 24 bytes: its first and last line
   prefetch(record), prefetch(record + sizeof(Face) - 1), prefetch(&T.alive[t]), prefetch(&T.area[t]);
 }
-/// Everything a split of e reads (its edge lines must be cached already: prefetch_edge).
-inline void prefetch_split(const Topology& m, int e) {
-  for (int v : {m.E[e].a, m.E[e].b, m.E[e].wl, m.E[e].wr}) prefetch_vertex(m, v);
-  prefetch_triangle(m, m.E[e].tri0);
-  prefetch_triangle(m, m.E[e].tri1);
+/// Everything a split reads beyond its edge (prefetch_edge), from its own copy of the edge's
+/// ends (i, j, l, r) and triangles: the edge's line itself is not read, so a miss on it does
+/// not hold the prefetches back.
+inline void prefetch_split(const Topology& m, const std::array<int, 4>& ends, const std::array<int, 2>& tris) {
+  for (int v : ends) prefetch_vertex(m, v);
+  for (int t : tris) prefetch_triangle(m, t);
 }
-/// Everything a restore of e reads (its record must be cached already).
-inline void prefetch_restore(const Topology& m, int e) {
-  const SplitRecord& r = m.records[m.E[e].record];
+/// Everything a restore of the split record r reads (r must be cached already).
+inline void prefetch_restore(const Topology& m, const SplitRecord& r) {
   prefetch_vertex(m, r.n);
   for (int q = 0; q < 4; ++q) {
     prefetch_vertex(m, r.k[q]);

@@ -20,11 +20,13 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, co
   const int waves = assign_waves();
   const Topology& m = sim.topo_;
   freed_.resize(restorable_.size());
+  auto record_at = [&](int q) { return candidates_[restorable_[by_wave_[q]]].record; };
   for (int w = 0; w < waves; ++w) {
     const int first = start_[w], size = start_[w + 1] - first;
     sim.par_.run(size, kWaveGrain, [&](int b, int e) {
       for (int q = first + b; q < first + e; ++q) {
-        if (q + kNear < first + e) prefetch_restore(m, restores[restorable_[by_wave_[q + kNear]]]);
+        if (q + kFar < first + e) prefetch(&m.records[record_at(q + kFar)]), prefetch_edge(m, restores[restorable_[by_wave_[q + kFar]]]);
+        if (q + kNear < first + e) prefetch_restore(m, m.records[record_at(q + kNear)]);
         const int p = by_wave_[q], k = restorable_[p];
         freed_[p] = {k, sim.restore_edge_local(restores[k])};
       }
@@ -61,8 +63,9 @@ void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores,
   sim.par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
       if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
-      const SplitRecord& r = m.records[m.E[restores[k]].record];
-      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !stamps.any_touched(r.t) && sim.can_restore(restores[k]), -1};
+      const int record = m.E[restores[k]].record;
+      const SplitRecord& r = m.records[record];
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !stamps.any_touched(r.t) && sim.can_restore(restores[k]), -1, record};
     }
   });
 }

@@ -54,6 +54,7 @@ class RestoreWaves {
     std::array<int, 5> verts;  ///< n, i, j, l, r of its split record (-1: none)
     bool restorable;           ///< on the state after the pass's splits, and so through the pass
     int wave;                  ///< its wave, 0 first (restorable candidates)
+    int record;                ///< its split record (for the waves' prefetch: no read of the edge)
   };
   /// Every candidate's vertices and answer, on the state after the pass's splits.
   void pretest(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps);

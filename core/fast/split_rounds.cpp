@@ -156,8 +156,13 @@ int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start_[r + 1] - start_[r] > kRoundGrain;
     sim.par_.run(start_[r + 1] - start_[r], kRoundGrain, [&](int b, int e) {
-      for (int k = start_[r] + b; k < start_[r] + e; ++k) {
-        if (k + kNear < start_[r] + e) prefetch_split(m, plans_[by_round_[k + kNear]].e);
+      const int end = start_[r] + e;
+      for (int k = start_[r] + b; k < end; ++k) {
+        if (k + kFar < end) prefetch_edge(m, plans_[by_round_[k + kFar]].e);
+        if (k + kNear < end) {
+          const int ahead = by_round_[k + kNear];
+          prefetch_split(m, plans_[ahead].ends, candidates_[accepted_[ahead].candidate].tris);
+        }
         const int i = by_round_[k];
         applied_[i] = sim.apply_split(plans_[i]);
       }
