@@ -1,7 +1,8 @@
 // Prefetches for the topology pass. Each event touches a few hundred bytes in some fifty cache
 // lines of the SoA arrays, far from the previous event's: prefetching the next events' lines
 // while one applies overlaps those misses (the events themselves still apply in order). kFar
-// ahead: the first lines (the edge, the record); kNear ahead: what those lines point to.
+// ahead: the first lines (the edge, the record); kNear ahead: what those lines point to, found
+// in the events' own copies where the pass keeps them (a split's plan, a restore's record).
 #pragma once
 
 #include <array>

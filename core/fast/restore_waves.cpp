@@ -20,13 +20,17 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, co
   const int waves = assign_waves();
   const Topology& m = sim.topo_;
   freed_.resize(restorable_.size());
-  auto record_at = [&](int q) { return candidates_[restorable_[by_wave_[q]]].record; };
+  auto candidate_at = [&](int q) { return restorable_[by_wave_[q]]; };  // at place q of the waves
   for (int w = 0; w < waves; ++w) {
     const int first = start_[w], size = start_[w + 1] - first;
     sim.par_.run(size, kWaveGrain, [&](int b, int e) {
-      for (int q = first + b; q < first + e; ++q) {
-        if (q + kFar < first + e) prefetch(&m.records[record_at(q + kFar)]), prefetch_edge(m, restores[restorable_[by_wave_[q + kFar]]]);
-        if (q + kNear < first + e) prefetch_restore(m, m.records[record_at(q + kNear)]);
+      const int end = first + e;
+      for (int q = first + b; q < end; ++q) {
+        if (q + kFar < end) {
+          const int k = candidate_at(q + kFar);
+          prefetch(&m.records[candidates_[k].record]), prefetch_edge(m, restores[k]);
+        }
+        if (q + kNear < end) prefetch_restore(m, m.records[candidates_[candidate_at(q + kNear)].record]);
         const int p = by_wave_[q], k = restorable_[p];
         freed_[p] = {k, sim.restore_edge_local(restores[k])};
       }
