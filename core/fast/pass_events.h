@@ -1,7 +1,9 @@
 // What the topology pass's two units (split_rounds.h, restore_waves.h) and one event's edits
-// (fast_edits.cpp) hand each other: the candidates and plans of splits and restores, and the
+// (fast_edits.cpp) hand each other: the candidates and plans of splits and restores, the
 // stamps that mark the triangles an accepted event of this pass changed (MODEL.md §4: an event
-// is skipped when an earlier one of the pass changed one of its triangles).
+// is skipped when an earlier one of the pass changed one of its triangles) and, in a second
+// instance, the vertices whose normals it renews; and the pass's shared loops (the byte scan
+// of decisions and stamps, the grouping of rounds and waves).
 #pragma once
 
 #include <algorithm>
