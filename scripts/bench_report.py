@@ -467,6 +467,10 @@ def roofline_section(benches, charts):
     return lines
 
 
+# The size whose frozen step sets the in-cache rate the larger sizes' are read against.
+CACHED_N = 128
+
+
 def frozen_floor_table(frozen, fresh, stream):
     """The frozen step against its bandwidth floor, as prepared and (BM_FrozenFresh, where
     measured) just after a relayout."""
@@ -475,17 +479,23 @@ def frozen_floor_table(frozen, fresh, stream):
              "its bandwidth floor, the time its counted bytes take at the best STREAM bandwidth on its thread count" +
              (("; `BM_FrozenFresh` times the same frames after one relayout of the prepared state, whose vertices "
                "are a fifth new since its last relayout and stored at the arrays' ends: the two bracket the step as "
-               "the layout ages between relayouts") if with_fresh else "") + ":", "",
-             "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex |" +
-             (" fresh layout ms | fresh / floor |" if with_fresh else ""),
-             "|---|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if with_fresh else "")]
+               "the layout ages between relayouts") if with_fresh else "") + ". `x N = " + str(CACHED_N) + "`: the ns "
+             "per vertex against the same configuration's at N = " + str(CACHED_N) + ", the smallest sheet here, whose "
+             "state (~10 MB) a server core's L3 can hold: a step that costs about as much a vertex at every size is bound by its kernels' "
+             "work and latency chains, not by the memory, however far above its floor:", "",
+             "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex | "
+             "x N = " + str(CACHED_N) + " |" + (" fresh layout ms | fresh / floor |" if with_fresh else ""),
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if with_fresh else "")]
     keys = order_configs({r[0] for r in frozen})
+    ns_cached = {key: b.median() * 1e6 / b.counter("vertices") for key, n, b in frozen if n == CACHED_N}
     for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
         ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
         floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
         bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
+        ns = ms * 1e6 / v
+        cached = f"{ns / ns_cached[key]:.2f}x" if key in ns_cached else "-"
         row = (f"| {short(key)} | {n} | {v:,.0f} | {fmt_ms(ms)} | {by / 1e6:.1f} | {bound} | "
-               f"{by / (ms * 1e-3) / 1e9:.1f} | {ms * 1e6 / v:.0f} |")
+               f"{by / (ms * 1e-3) / 1e9:.1f} | {ns:.0f} | {cached} |")
         if with_fresh:
             f = fresh.get(key, {}).get(n)
             if f is None:

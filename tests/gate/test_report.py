@@ -290,8 +290,28 @@ class FrozenFresh(unittest.TestCase):
         rows = [line for line in lines if line.startswith("| fast")]
         self.assertEqual(len(rows), 2, rows)
         # 95 MB at 19 GB/s: 5 ms (2.0x, fresh 1.4x); at 14 GB/s: 6.79 ms (2.9x), no fresh run.
-        self.assertTrue(rows[0].startswith("| fast 1t | 256 |") and rows[0].endswith("| 6.79 | 2.9x | 4.8 | 200 | - | - |"), rows[0])
-        self.assertTrue(rows[1].startswith("| fast 2t | 256 |") and rows[1].endswith("| 5 | 2.0x | 9.5 | 100 | 7 | 1.4x |"), rows[1])
+        self.assertTrue(rows[0].startswith("| fast 1t | 256 |") and rows[0].endswith("| 6.79 | 2.9x | 4.8 | 200 | - | - | - |"), rows[0])
+        self.assertTrue(rows[1].startswith("| fast 2t | 256 |") and rows[1].endswith("| 5 | 2.0x | 9.5 | 100 | - | 7 | 1.4x |"), rows[1])
+
+
+class FrozenAgainstCached(unittest.TestCase):
+    """Each frozen row's ns per vertex against its own configuration's at N = 128. Wrong code this
+    catches: a ratio of frame times instead of per-vertex costs (the sizes' vertex counts differ),
+    a 128 row of another thread count or configuration as the divisor (here 1t's 128 row costs
+    twice 2t's), a row without a 128 row of its own given a ratio rather than '-'."""
+
+    def test_each_size_against_its_own_configurations_128(self):
+        b = {k: v for k, v in benches().items() if k.startswith("BM_Stream")}
+        for name, ms, vertices in [("BM_Frozen/fast/2/128/manual_time", 2.0, 25000),    # 80 ns
+                                   ("BM_Frozen/fast/2/512/manual_time", 45.0, 450000),  # 100 ns
+                                   ("BM_Frozen/fast/1/128/manual_time", 4.0, 25000),    # 160 ns
+                                   ("BM_Frozen/fast/1/512/manual_time", 90.0, 450000),  # 200 ns
+                                   ("BM_Frozen/fast-nosimd/1/512/manual_time", 90.0, 450000)]:
+            b[name] = bench(name, ms, bytes=95e6, vertices=vertices)
+        rows = {" | ".join(line.split(" | ")[:2]): line.split(" | ")[9].strip(" |")
+                for line in bench_report.roofline_section(b, {}) if line.startswith("| fast")}
+        self.assertEqual(rows, {"| fast 2t | 128": "1.00x", "| fast 2t | 512": "1.25x", "| fast 1t | 128": "1.00x",
+                                "| fast 1t | 512": "1.25x", "| fast-nosimd 1t | 512": "-"})
 
 
 class FirstTouch(unittest.TestCase):
