@@ -481,8 +481,8 @@ def frozen_floor_table(frozen, fresh, stream):
                "are a fifth new since its last relayout and stored at the arrays' ends: the two bracket the step as "
                "the layout ages between relayouts") if with_fresh else "") + ". `x N = " + str(CACHED_N) + "`: the ns "
              "per vertex against the same configuration's at N = " + str(CACHED_N) + ", the smallest sheet here, whose "
-             "state (~10 MB) a server core's L3 can hold: a step that costs about as much a vertex at every size is bound by its kernels' "
-             "work and latency chains, not by the memory, however far above its floor:", "",
+             "state (~10 MB) a server core's L3 can hold: a step that costs about as much a vertex at every size "
+             "is bound by its kernels' work and latency chains, not by the memory, however far above its floor:", "",
              "| configuration | N | vertices | frozen ms | MB moved | floor ms | frozen / floor | GB/s | ns per vertex | "
              "x N = " + str(CACHED_N) + " |" + (" fresh layout ms | fresh / floor |" if with_fresh else ""),
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|" + ("---:|---:|" if with_fresh else "")]
