@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "fast/lanes8.h"
 #include "fast/wide.h"
@@ -123,6 +124,39 @@ inline Stencil stencil(const Edges& E, int e) {
 }
 
 #if CRUMPLE_LANES8
+// The fields of an EdgeRecord that the edge pass reads, as two 16-byte rows that load_at
+// transposes: (a, b, wl, wr) at the record's start and (tri1, l0, record, flags) ending at its
+// last byte (the flags' word holds the record's padding, which the mask below ignores).
+constexpr std::size_t kStencilRow = 0, kRestRow = offsetof(EdgeRecord, tri1);
+static_assert(offsetof(EdgeRecord, a) == kStencilRow && offsetof(EdgeRecord, b) == kStencilRow + 4 &&
+              offsetof(EdgeRecord, wl) == kStencilRow + 8 && offsetof(EdgeRecord, wr) == kStencilRow + 12);
+static_assert(offsetof(EdgeRecord, l0) == kRestRow + 4 && offsetof(EdgeRecord, flags) == kRestRow + 12 &&
+              sizeof(EdgeRecord) == kRestRow + 16);
+
+/// stencil() of eight edges in lanes: their rows' ids into a, b, l, r, the hinge (1 or 0) and
+/// the rest lengths as registers. Selects in lanes rather than stencil()'s per-edge tests, which
+/// compile to branches that mispredict wherever hinges and other edges alternate.
+inline void stencils8(const EdgeRecord* const edge[8], int a[8], int b[8], int l[8], int r[8], __m256& hinge,
+                      __m256& rest) {
+  using namespace lanes8;
+  const void* at[8];
+  __m256 fa, fb, fwl, fwr, unused, flags;
+  for (int k = 0; k < 8; ++k) at[k] = reinterpret_cast<const char*>(edge[k]) + kStencilRow;
+  load_at(at, fa, fb, fwl, fwr);
+  for (int k = 0; k < 8; ++k) at[k] = reinterpret_cast<const char*>(edge[k]) + kRestRow;
+  load_at(at, unused, rest, unused, flags);
+  const __m256i ia = _mm256_castps_si256(fa), wl = _mm256_castps_si256(fwl), wr = _mm256_castps_si256(fwr);
+  const __m256i mesh_bit = _mm256_set1_epi32(kMesh);
+  const __m256i mesh = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_castps_si256(flags), mesh_bit), mesh_bit);
+  const __m256i wings = _mm256_cmpgt_epi32(_mm256_setzero_si256(), _mm256_or_si256(wl, wr));  // -1: a wing < 0
+  const __m256i is_hinge = _mm256_andnot_si256(wings, mesh);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(a), ia);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(b), _mm256_castps_si256(fb));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(l), _mm256_blendv_epi8(ia, wl, is_hinge));
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(r), _mm256_blendv_epi8(ia, wr, is_hinge));
+  hinge = _mm256_and_ps(_mm256_castsi256_ps(is_hinge), _mm256_set1_ps(1.0f));
+}
+
 // The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
 // range's last edge in the lanes past it and stores only its own lanes.
 void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* __restrict out,
@@ -138,14 +172,14 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
   alignas(32) static thread_local EdgeOut spare[8];
   for (int e0 = begin; e0 < end; e0 += 8) {
     int a[8], b[8], l[8], r[8];
-    alignas(32) float hinge[8], rest[8];
+    const EdgeRecord* edge[8];
     float* dst[8];
     for (int k = 0; k < 8; ++k) {
-      const int e = std::min(e0 + k, end - 1);
-      const Stencil q = stencil(E, e);
-      a[k] = q.a, b[k] = q.b, l[k] = q.l, r[k] = q.r, hinge[k] = q.hinge, rest[k] = E[e].l0;
+      edge[k] = &E[std::min(e0 + k, end - 1)];
       dst[k] = e0 + k < end ? &out[e0 + k].fx : &spare[k].fx;
     }
+    __m256 hinge, rest;
+    stencils8(edge, a, b, l, r, hinge, rest);
     __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
     load_rows(V.xm.data(), a, xa, ya, za, ma);
     load_rows(V.xm.data(), b, xb, yb, zb, mb);
@@ -157,7 +191,7 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
     const __m256 inv = _mm256_and_ps(_mm256_cmp_ps(lt, zero, _CMP_GT_OQ), one / lt);
     const __m256 msum = ma + mb;
     const __m256 rel = -((vxb - vxa) * dx + (vyb - vya) * dy + (vzb - vza) * dz) * inv;
-    const __m256 s = (-kappa * (lt - _mm256_load_ps(rest)) - damping * rel) * msum * inv;
+    const __m256 s = (-kappa * (lt - rest) - damping * rel) * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     __m256 nxa, nya, nza, nxb, nyb, nzb, nxl, nyl, nzl, nxr, nyr, nzr, xl, yl, zl, xr, yr, zr;
     load_rows(V.nr.data(), a, nxa, nya, nza, unused);
@@ -171,7 +205,7 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
     const __m256 gx = (xr + nxr) - (xl + nxl), gy = (yr + nyr) - (yl + nyl), gz = (zr + nzr) - (zl + nzl);
     const __m256 ox = xr - xl, oy = yr - yl, oz = zr - zl;
     const __m256 gap = _mm256_sqrt_ps(gx * gx + gy * gy + gz * gz) - _mm256_sqrt_ps(ox * ox + oy * oy + oz * oz);
-    const __m256 k = _mm256_load_ps(hinge) * (sign(gap) * bend * msum * Bmag);
+    const __m256 k = hinge * (sign(gap) * bend * msum * Bmag);
     const __m256 qk = quarter * k;  // mean of f_i = -k n_i, f_j = -k n_j, f_r = k n_r, f_l = k n_l
     store_rows(dst, s * dx, s * dy, s * dz, k);
     float* const mean[8] = {dst[0] + 4, dst[1] + 4, dst[2] + 4, dst[3] + 4, dst[4] + 4, dst[5] + 4, dst[6] + 4, dst[7] + 4};

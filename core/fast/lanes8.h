@@ -15,13 +15,9 @@
 
 namespace crumple::fast::lanes8 {
 
-/// Rows rows[id[0..7]] -> one register per component: x, y, z, w of the eight rows.
-inline void load_rows(const Float4* rows, const int id[8], __m256& x, __m256& y, __m256& z, __m256& w) {
-  auto pair = [&](int lo, int hi) {
-    const __m128 a = _mm_loadu_ps(&rows[id[lo]].x), b = _mm_loadu_ps(&rows[id[hi]].x);
-    return _mm256_insertf128_ps(_mm256_castps128_ps256(a), b, 1);
-  };
-  const __m256 r04 = pair(0, 4), r15 = pair(1, 5), r26 = pair(2, 6), r37 = pair(3, 7);
+/// Four registers, each holding row k in its low half and row k + 4 in its high half (k = 0..3)
+/// -> one register per component: x, y, z, w of the eight rows.
+inline void transpose(__m256 r04, __m256 r15, __m256 r26, __m256 r37, __m256& x, __m256& y, __m256& z, __m256& w) {
   const __m256 t0 = _mm256_unpacklo_ps(r04, r15), t1 = _mm256_unpackhi_ps(r04, r15);
   const __m256 t2 = _mm256_unpacklo_ps(r26, r37), t3 = _mm256_unpackhi_ps(r26, r37);
   x = _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0));
@@ -30,13 +26,27 @@ inline void load_rows(const Float4* rows, const int id[8], __m256& x, __m256& y,
   w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
+/// The 16 bytes at at[0..7] (any alignment) -> their four 4-byte fields as one register each.
+inline void load_at(const void* const at[8], __m256& x, __m256& y, __m256& z, __m256& w) {
+  auto pair = [&](int lo, int hi) {
+    const __m128 a = _mm_loadu_ps(static_cast<const float*>(at[lo])), b = _mm_loadu_ps(static_cast<const float*>(at[hi]));
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(a), b, 1);
+  };
+  transpose(pair(0, 4), pair(1, 5), pair(2, 6), pair(3, 7), x, y, z, w);
+}
+
+/// Rows rows[id[0..7]] -> one register per component: x, y, z, w of the eight rows.
+inline void load_rows(const Float4* rows, const int id[8], __m256& x, __m256& y, __m256& z, __m256& w) {
+  const void* const at[8] = {&rows[id[0]], &rows[id[1]], &rows[id[2]], &rows[id[3]],
+                             &rows[id[4]], &rows[id[5]], &rows[id[6]], &rows[id[7]]};
+  load_at(at, x, y, z, w);
+}
+
 /// The inverse: lane k of (a, b, c, d) -> the four floats at dst[k] (16-byte aligned).
 inline void store_rows(float* const dst[8], __m256 a, __m256 b, __m256 c, __m256 d) {
-  const __m256 t0 = _mm256_unpacklo_ps(a, b), t1 = _mm256_unpackhi_ps(a, b);
-  const __m256 t2 = _mm256_unpacklo_ps(c, d), t3 = _mm256_unpackhi_ps(c, d);
-  const __m256 r[4] = {_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2)),
-                       _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0)), _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2))};
-  for (int k = 0; k < 4; ++k) {  // r[k] holds lanes k and k + 4
+  __m256 r[4];  // r[k] holds lanes k and k + 4: the transposition is its own inverse
+  transpose(a, b, c, d, r[0], r[1], r[2], r[3]);
+  for (int k = 0; k < 4; ++k) {
     _mm_store_ps(dst[k], _mm256_castps256_ps128(r[k]));
     _mm_store_ps(dst[k + 4], _mm256_extractf128_ps(r[k], 1));
   }

@@ -491,6 +491,44 @@ TEST(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
   }
 }
 
+// The edge pass bends only hinges, mesh edges with both wings [Eq 8-9]: an auxiliary edge keeps
+// its split's crease wings in wl and wr (the restoration test reads them) and a boundary edge
+// has a wing of -1, and neither may bend. The eight-lane pass reads the stencils of eight
+// records at once; a mask that missed the mesh flag would bend the auxiliary edges, one that
+// missed a wing's sign would read row -1.
+TEST(EdgeLanes, OnlyHingesBend) {
+  Params p;
+  p.integrator = Integrator::Explicit;
+  fast::FastSimulator sim(make_grid(12), p, 1);
+  for (int s = 0; s < 40; ++s) sim.step();
+  fast::Topology m = sim.topology();
+  fast::StepConstants c;
+  c.kappa = float(p.kappa), c.bend = float(p.bend), c.damping = 0.5f, c.implicit = 1e-3f;
+  fast::triangle_areas(m, 1.0f, m.T.area.data(), 0, m.T.size());
+  fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
+  fast::StepScratch step;
+  step.fit(m);
+  const int n = m.E.size();
+  fast::edge_forces(m.E, m.V, c, step.edge_out.data(), 0, n);
+  int hinges_bent = 0, creases = 0, boundary = 0;
+  for (int e = 0; e < n; ++e) {
+    const fast::EdgeRecord& r = m.E[e];
+    const bool mesh = r.flags & fast::kMesh, wings = r.wl >= 0 && r.wr >= 0;
+    const fast::EdgeOut& o = step.edge_out[std::size_t(e)];
+    if (mesh && wings) {
+      hinges_bent += o.kb != 0;
+      continue;
+    }
+    creases += (r.flags & fast::kAlive) && !mesh && wings;
+    boundary += mesh && !wings;
+    EXPECT_EQ(o.kb, 0.0f) << "edge " << e;
+    EXPECT_TRUE(o.bx == 0 && o.by == 0 && o.bz == 0) << "edge " << e;
+  }
+  EXPECT_GT(hinges_bent, n / 4);
+  EXPECT_GT(creases, 0);   // auxiliary edges with their crease's wings are in the state
+  EXPECT_GT(boundary, 0);  // and mesh edges with one wing
+}
+
 // The fracture and restoration test runs in fixed blocks on any thread (adapt_decide): a
 // decision must not depend on the range that made it, and no range may write a byte outside
 // itself (another thread's block: a race even where it writes the right value; a kernel that
