@@ -139,12 +139,9 @@ static_assert(offsetof(EdgeRecord, l0) == kRestRow + 4 && offsetof(EdgeRecord, f
 inline void stencils8(const EdgeRecord* const edge[8], int a[8], int b[8], int l[8], int r[8], __m256& hinge,
                       __m256& rest) {
   using namespace lanes8;
-  const void* at[8];
   __m256 fa, fb, fwl, fwr, unused, flags;
-  for (int k = 0; k < 8; ++k) at[k] = reinterpret_cast<const char*>(edge[k]) + kStencilRow;
-  load_at(at, fa, fb, fwl, fwr);
-  for (int k = 0; k < 8; ++k) at[k] = reinterpret_cast<const char*>(edge[k]) + kRestRow;
-  load_at(at, unused, rest, unused, flags);
+  load_at(edge, kStencilRow, fa, fb, fwl, fwr);
+  load_at(edge, kRestRow, unused, rest, unused, flags);
   const __m256i ia = _mm256_castps_si256(fa), wl = _mm256_castps_si256(fwl), wr = _mm256_castps_si256(fwr);
   const __m256i mesh_bit = _mm256_set1_epi32(kMesh);
   const __m256i mesh = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_castps_si256(flags), mesh_bit), mesh_bit);

@@ -26,20 +26,22 @@ inline void transpose(__m256 r04, __m256 r15, __m256 r26, __m256 r37, __m256& x,
   w = _mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2));
 }
 
-/// The 16 bytes at at[0..7] (any alignment) -> their four 4-byte fields as one register each.
-inline void load_at(const void* const at[8], __m256& x, __m256& y, __m256& z, __m256& w) {
+/// The 16 bytes at byte `offset` of *at[0..7] (any alignment) -> their four 4-byte fields as one
+/// register each.
+template <class Row>
+inline void load_at(const Row* const at[8], std::size_t offset, __m256& x, __m256& y, __m256& z, __m256& w) {
+  auto row = [&](int k) { return reinterpret_cast<const float*>(reinterpret_cast<const char*>(at[k]) + offset); };
   auto pair = [&](int lo, int hi) {
-    const __m128 a = _mm_loadu_ps(static_cast<const float*>(at[lo])), b = _mm_loadu_ps(static_cast<const float*>(at[hi]));
-    return _mm256_insertf128_ps(_mm256_castps128_ps256(a), b, 1);
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(row(lo))), _mm_loadu_ps(row(hi)), 1);
   };
   transpose(pair(0, 4), pair(1, 5), pair(2, 6), pair(3, 7), x, y, z, w);
 }
 
 /// Rows rows[id[0..7]] -> one register per component: x, y, z, w of the eight rows.
 inline void load_rows(const Float4* rows, const int id[8], __m256& x, __m256& y, __m256& z, __m256& w) {
-  const void* const at[8] = {&rows[id[0]], &rows[id[1]], &rows[id[2]], &rows[id[3]],
-                             &rows[id[4]], &rows[id[5]], &rows[id[6]], &rows[id[7]]};
-  load_at(at, x, y, z, w);
+  const Float4* const at[8] = {&rows[id[0]], &rows[id[1]], &rows[id[2]], &rows[id[3]],
+                               &rows[id[4]], &rows[id[5]], &rows[id[6]], &rows[id[7]]};
+  load_at(at, 0, x, y, z, w);
 }
 
 /// The inverse: lane k of (a, b, c, d) -> the four floats at dst[k] (16-byte aligned).

@@ -458,24 +458,33 @@ TEST(Parallel, InvokeRunsBothJobsOnceAndReturnsWhenBothAreDone) {
   }
 }
 
+// The edge pass's input, as a step prepares it: a crumpled state with splits and auxiliary edges
+// (40 explicit steps of a 12 x 12 sheet), its triangle areas and vertex normals, and the
+// constants and scratch of a step.
+class EdgeLanes : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    p.integrator = Integrator::Explicit;
+    fast::FastSimulator sim(make_grid(12), p, 1);
+    for (int s = 0; s < 40; ++s) sim.step();
+    m = sim.topology();
+    c.kappa = float(p.kappa), c.bend = float(p.bend), c.damping = 0.5f, c.implicit = 1e-3f;
+    fast::triangle_areas(m, 1.0f, m.T.area.data(), 0, m.T.size());
+    fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
+    step.fit(m);
+  }
+  Params p;
+  fast::Topology m;
+  fast::StepConstants c;
+  fast::StepScratch step;
+};
+
 // The edge pass runs eight edges in AVX lanes (lanes8.h), the last block of a range padded with
 // its last edge: an edge's record must be the same bits whichever lane and chunk computed it,
 // and a range must write no record outside itself. Ranges split at every offset and run last
 // part first, so a block that stored its padding lanes past the end of its range would overwrite
 // the records of the part already done.
-TEST(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
-  Params p;
-  p.integrator = Integrator::Explicit;
-  fast::FastSimulator sim(make_grid(12), p, 1);
-  for (int s = 0; s < 40; ++s) sim.step();  // a crumpled state with splits and auxiliary edges
-  fast::Topology m = sim.topology();
-  fast::StepConstants c;
-  c.kappa = float(p.kappa), c.bend = float(p.bend), c.damping = 0.5f, c.implicit = 1e-3f;
-  const float unit = 1.0f;
-  fast::triangle_areas(m, unit, m.T.area.data(), 0, m.T.size());
-  fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
-  fast::StepScratch step;
-  step.fit(m);
+TEST_F(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
   const int n = m.E.size();
   fast::EdgeOut* out = step.edge_out.data();
   fast::edge_forces(m.E, m.V, c, out, 0, n);
@@ -496,18 +505,7 @@ TEST(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
 // has a wing of -1, and neither may bend. The eight-lane pass reads the stencils of eight
 // records at once; a mask that missed the mesh flag would bend the auxiliary edges, one that
 // missed a wing's sign would read row -1.
-TEST(EdgeLanes, OnlyHingesBend) {
-  Params p;
-  p.integrator = Integrator::Explicit;
-  fast::FastSimulator sim(make_grid(12), p, 1);
-  for (int s = 0; s < 40; ++s) sim.step();
-  fast::Topology m = sim.topology();
-  fast::StepConstants c;
-  c.kappa = float(p.kappa), c.bend = float(p.bend), c.damping = 0.5f, c.implicit = 1e-3f;
-  fast::triangle_areas(m, 1.0f, m.T.area.data(), 0, m.T.size());
-  fast::vertex_normals(m, m.V.nr.data(), 0, m.V.size());
-  fast::StepScratch step;
-  step.fit(m);
+TEST_F(EdgeLanes, OnlyHingesBend) {
   const int n = m.E.size();
   fast::edge_forces(m.E, m.V, c, step.edge_out.data(), 0, n);
   int hinges_bent = 0, creases = 0, boundary = 0;
