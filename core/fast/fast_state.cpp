@@ -3,9 +3,12 @@
 // whatever slot layout.h has put it in, and sums run in logical order, but for the edges' part
 // of the totals (edge_totals).
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
 
 #include "fast/fast_sim.h"
+#include "fast/lanes8.h"
 
 namespace crumple::fast {
 
@@ -42,20 +45,31 @@ void vertex_totals(const Vertices& V, const double c[3], int begin, int end, Ver
     t.momentum[2] += m * vz;
     const double v2 = vx * vx + vy * vy + vz * vz;
     t.kinetic += 0.5 * m * v2;
-    t.max_speed = std::max(t.max_speed, std::sqrt(v2));
+    t.max_speed = std::max(t.max_speed, v2);  // squared until the block's end: see below
     const double dx = V.xm[v].x - c[0], dy = V.xm[v].y - c[1], dz = V.xm[v].z - c[2];
-    t.max_distance = std::max(t.max_distance, std::sqrt(dx * dx + dy * dy + dz * dz));
+    t.max_distance = std::max(t.max_distance, dx * dx + dy * dy + dz * dz);
     t.finite &= bool(std::isfinite(V.xm[v].x + V.xm[v].y + V.xm[v].z + v2));
   }
+  // The largest root is the root of the largest square (a correctly rounded square root is
+  // monotone, and std::max skips a NaN second argument either way): one root a block, not two
+  // a vertex.
+  t.max_speed = std::sqrt(t.max_speed);
+  t.max_distance = std::sqrt(t.max_distance);
   out = t;
 }
 
-// Over slots, where the records stream and the layout keeps each edge's endpoints near it (in
-// logical order every record and both endpoints are random reads). The counts and the largest
-// strain do not depend on the order; the squared strains' sum, which only the instability check
-// reads (rms_strain), may differ in its last bits with the layout (docs/DECISIONS.md D12).
-void edge_totals(const Edges& E, const Vertices& V, int begin, int end, EdgePart& out) {
-  EdgePart t;  // a local, as in vertex_totals
+/// One edge's strain |x_a - x_b| / l0 - 1, from its endpoints' rows, in double.
+inline double strain_of(const EdgeRecord& r, const Float4& pa, const Float4& pb) {
+  const double dx = double(pa.x) - pb.x, dy = double(pa.y) - pb.y, dz = double(pa.z) - pb.z;
+  return std::sqrt(dx * dx + dy * dy + dz * dz) / r.l0 - 1.0;
+}
+
+// The edges' part runs over slots, where the records stream and the layout keeps each edge's
+// endpoints near it (in logical order every record and both endpoints are random reads). The
+// counts and the largest strain do not depend on the order; the squared strains' sum, which only
+// the instability check reads (rms_strain), may differ in its last bits with the layout
+// (docs/DECISIONS.md D12). One slot at a time: the pass without AVX2, and a block's tail.
+void edge_totals_scalar(const Edges& E, const Vertices& V, int begin, int end, EdgePart& t) {
   for (int e = begin; e < end; ++e) {
     const EdgeRecord& r = E[e];
     if (!(r.flags & kAlive)) continue;
@@ -64,14 +78,88 @@ void edge_totals(const Edges& E, const Vertices& V, int begin, int end, EdgePart
       continue;
     }
     ++t.mesh_edges;
-    const Float4 pa = V.xm[r.a], pb = V.xm[r.b];
-    const double dx = double(pa.x) - pb.x, dy = double(pa.y) - pb.y, dz = double(pa.z) - pb.z;
-    const double strain = std::sqrt(dx * dx + dy * dy + dz * dz) / r.l0 - 1.0;
+    const double strain = strain_of(r, V.xm[r.a], V.xm[r.b]);
     t.max_strain = std::max(t.max_strain, std::abs(strain));
     t.strain2 += strain * strain;
   }
+}
+
+#if CRUMPLE_LANES8 && defined(__FMA__)
+/// The strain of eight mesh edges in lanes, as strain_of computes it (its products fused as GCC
+/// fuses them on an FMA target), 0 in the lanes of other slots, whose endpoints are read as
+/// vertex 0's (a dead slot's ids may be stale).
+void strains8(const EdgeRecord* const edge[8], const Vertices& V, __m256d& lo, __m256d& hi, int& mesh_bits,
+              int& auxiliary_bits) {
+  using namespace lanes8;
+  __m256 fa, fb, unused, l0, flags;
+  load_at(edge, offsetof(EdgeRecord, a), fa, fb, unused, unused);
+  load_at(edge, offsetof(EdgeRecord, tri1), unused, l0, unused, flags);
+  const __m256i kind = _mm256_and_si256(_mm256_castps_si256(flags), _mm256_set1_epi32(kAlive | kMesh));
+  const __m256i mesh = _mm256_cmpeq_epi32(kind, _mm256_set1_epi32(kAlive | kMesh));
+  const __m256i auxiliary = _mm256_cmpeq_epi32(kind, _mm256_set1_epi32(kAlive));
+  mesh_bits = _mm256_movemask_ps(_mm256_castsi256_ps(mesh));
+  auxiliary_bits = _mm256_movemask_ps(_mm256_castsi256_ps(auxiliary));
+  alignas(32) int a[8], b[8];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(a), _mm256_and_si256(_mm256_castps_si256(fa), mesh));
+  _mm256_store_si256(reinterpret_cast<__m256i*>(b), _mm256_and_si256(_mm256_castps_si256(fb), mesh));
+  __m256 xa, ya, za, xb, yb, zb;
+  load_rows(V.xm.data(), a, xa, ya, za, unused);
+  load_rows(V.xm.data(), b, xb, yb, zb, unused);
+  auto half = [&](auto part, __m128i lanes) {  // part: the low or the high four lanes as double
+    const __m256d dx = part(xa) - part(xb), dy = part(ya) - part(yb), dz = part(za) - part(zb);
+    const __m256d d2 = _mm256_fmadd_pd(dz, dz, _mm256_fmadd_pd(dx, dx, dy * dy));
+    const __m256d strain = _mm256_sqrt_pd(d2) / part(l0) - _mm256_set1_pd(1.0);
+    return _mm256_and_pd(strain, _mm256_castsi256_pd(_mm256_cvtepi32_epi64(lanes)));
+  };
+  lo = half([](__m256 x) { return _mm256_cvtps_pd(_mm256_castps256_ps128(x)); }, _mm256_castsi256_si128(mesh));
+  hi = half([](__m256 x) { return _mm256_cvtps_pd(_mm256_extractf128_ps(x, 1)); }, _mm256_extracti128_si256(mesh, 1));
+}
+
+/// Slots ahead whose endpoints' rows edge_totals prefetches, so that the misses of the rows
+/// scattered since the last relayout overlap.
+constexpr int kStrainAhead = 32;
+
+// Eight slots at a time, branch-free (mesh, auxiliary and dead slots interleave at random, so
+// per-slot branches mispredict), the squares summed per lane and the lanes added in a fixed
+// order at the end; a block's last slots past a multiple of eight run edge_totals_scalar. The
+// blocks are fixed, so the sums are the same on any thread count.
+void edge_totals(const Edges& E, const Vertices& V, int begin, int end, EdgePart& out) {
+  EdgePart t;  // a local, as in vertex_totals
+  __m256d max_lo = _mm256_setzero_pd(), max_hi = max_lo, sum_lo = max_lo, sum_hi = max_lo;
+  const __m256d magnitude = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
+  int e0 = begin;
+  for (; e0 + 8 <= end; e0 += 8) {
+    if (e0 + kStrainAhead + 8 <= end)
+      for (int k = e0 + kStrainAhead; k < e0 + kStrainAhead + 8; ++k)
+        __builtin_prefetch(&V.xm[E[k].a]), __builtin_prefetch(&V.xm[E[k].b]);
+    const EdgeRecord* edge[8];
+    for (int k = 0; k < 8; ++k) edge[k] = &E[e0 + k];
+    __m256d lo, hi;
+    int mesh, auxiliary;
+    strains8(edge, V, lo, hi, mesh, auxiliary);
+    t.mesh_edges += std::popcount(unsigned(mesh));
+    t.auxiliary += std::popcount(unsigned(auxiliary));
+    // max_pd returns its second operand where either is NaN: a NaN strain leaves the maximum as
+    // std::max(max, NaN) does.
+    max_lo = _mm256_max_pd(_mm256_and_pd(lo, magnitude), max_lo);
+    max_hi = _mm256_max_pd(_mm256_and_pd(hi, magnitude), max_hi);
+    sum_lo = _mm256_fmadd_pd(lo, lo, sum_lo);
+    sum_hi = _mm256_fmadd_pd(hi, hi, sum_hi);
+  }
+  alignas(32) double m[8], s[8];
+  _mm256_store_pd(m, max_lo), _mm256_store_pd(m + 4, max_hi);
+  _mm256_store_pd(s, sum_lo), _mm256_store_pd(s + 4, sum_hi);
+  for (int k = 0; k < 8; ++k) t.max_strain = std::max(t.max_strain, m[k]), t.strain2 += s[k];
+  edge_totals_scalar(E, V, e0, end, t);
   out = t;
 }
+#else
+void edge_totals(const Edges& E, const Vertices& V, int begin, int end, EdgePart& out) {
+  EdgePart t;  // a local, as in vertex_totals
+  edge_totals_scalar(E, V, begin, end, t);
+  out = t;
+}
+#endif
 }  // namespace
 
 // Sums in fixed blocks (of ids; of slots for the edges) whose partial sums are added in block
