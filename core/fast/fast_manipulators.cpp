@@ -86,9 +86,15 @@ void FastSimulator::apply_manipulators() {
 }
 
 // The buffers are per logical id while the state is in slots: the vertex copy runs over slots
-// (rows read in order, each written to its id's place: scattered writes do not stall as
-// scattered reads do), the triangles in fixed blocks of ids, each block's live triangles
-// counted first so that every block writes its own range (the same buffer on any thread count).
+// (rows read in order, each written to its id's place), the triangles in fixed blocks of ids,
+// each block's live triangles counted first so that every block writes its own range (the same
+// buffer on any thread count).
+
+/// Slots ahead whose buffer lines the vertex copy fetches for writing: a write at an id's place
+/// misses its line, and a missed store holds its store-buffer entry until the line arrives, so
+/// without the fetch the loop stalls once the buffer is full of misses.
+constexpr int kRenderAhead = 16;
+
 void FastSimulator::render(RenderBuffers& out, bool triangles) {
   if (!normals_valid_) {  // the same normals the next step would compute first
     compute_normals();
@@ -101,6 +107,10 @@ void FastSimulator::render(RenderBuffers& out, bool triangles) {
   out.normals.resize(3 * std::size_t(V.size()));
   par_.run(V.size(), kPassGrain, [&](int b, int e) {
     for (int v = b; v < e; ++v) {
+      if (v + kRenderAhead < e) {
+        const std::size_t ahead = std::size_t(V.lid[v + kRenderAhead]);
+        __builtin_prefetch(&out.positions[3 * ahead], 1), __builtin_prefetch(&out.normals[3 * ahead], 1);
+      }
       const bool live = V.mass(v) > 0;
       const std::size_t id = std::size_t(V.lid[v]);
       const Float4 p = live ? V.xm[v] : Float4{}, nv = live ? V.nr[v] : Float4{};
