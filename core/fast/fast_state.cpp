@@ -27,7 +27,7 @@ struct EdgePart {
 /// The vertex sums run in logical order, so each id's slot is a random read: the rows of the id
 /// this far ahead are prefetched, so that the reads overlap instead of waiting one after the
 /// other.
-constexpr int kTotalsAhead = 16;
+constexpr int kTotalsAhead = 64;
 
 void vertex_totals(const Vertices& V, const double c[3], int begin, int end, VertexPart& out) {
   VertexPart t;  // a local, whose sums stay in registers (through `out` each add would store)
