@@ -85,16 +85,15 @@ void FastSimulator::apply_manipulators() {
   }
 }
 
-// The buffers are per logical id while the state is in slots: the vertex copy runs over slots
-// (rows read in order, each written to its id's place), the triangles in fixed blocks of ids,
-// each block's live triangles counted first so that every block writes its own range (the same
-// buffer on any thread count).
-
 /// Slots ahead whose buffer lines the vertex copy fetches for writing: a write at an id's place
 /// misses its line, and a missed store holds its store-buffer entry until the line arrives, so
 /// without the fetch the loop stalls once the buffer is full of misses.
 constexpr int kRenderAhead = 16;
 
+// The buffers are per logical id while the state is in slots: the vertex copy runs over slots
+// (rows read in order, each written to its id's place), the triangles in fixed blocks of ids,
+// each block's live triangles counted first so that every block writes its own range (the same
+// buffer on any thread count).
 void FastSimulator::render(RenderBuffers& out, bool triangles) {
   if (!normals_valid_) {  // the same normals the next step would compute first
     compute_normals();
