@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstddef>
 
 #include "fast/fast_sim.h"
 #include "fast/lanes8.h"
@@ -92,8 +91,8 @@ void strains8(const EdgeRecord* const edge[8], const Vertices& V, __m256d& lo, _
               int& auxiliary_bits) {
   using namespace lanes8;
   __m256 fa, fb, unused, l0, flags;
-  load_at(edge, offsetof(EdgeRecord, a), fa, fb, unused, unused);
-  load_at(edge, offsetof(EdgeRecord, tri1), unused, l0, unused, flags);
+  load_at(edge, kStencilRow, fa, fb, unused, unused);
+  load_at(edge, kRestRow, unused, l0, unused, flags);
   const __m256i kind = _mm256_and_si256(_mm256_castps_si256(flags), _mm256_set1_epi32(kAlive | kMesh));
   const __m256i mesh = _mm256_cmpeq_epi32(kind, _mm256_set1_epi32(kAlive | kMesh));
   const __m256i auxiliary = _mm256_cmpeq_epi32(kind, _mm256_set1_epi32(kAlive));

@@ -124,15 +124,6 @@ inline Stencil stencil(const Edges& E, int e) {
 }
 
 #if CRUMPLE_LANES8
-// The fields of an EdgeRecord that the edge pass reads, as two 16-byte rows that load_at
-// transposes: (a, b, wl, wr) at the record's start and (tri1, l0, record, flags) ending at its
-// last byte (the flags' word holds the record's padding, which the mask below ignores).
-constexpr std::size_t kStencilRow = 0, kRestRow = offsetof(EdgeRecord, tri1);
-static_assert(offsetof(EdgeRecord, a) == kStencilRow && offsetof(EdgeRecord, b) == kStencilRow + 4 &&
-              offsetof(EdgeRecord, wl) == kStencilRow + 8 && offsetof(EdgeRecord, wr) == kStencilRow + 12);
-static_assert(offsetof(EdgeRecord, l0) == kRestRow + 4 && offsetof(EdgeRecord, flags) == kRestRow + 12 &&
-              sizeof(EdgeRecord) == kRestRow + 16);
-
 /// stencil() of eight edges in lanes: their rows' ids into a, b, l, r, the hinge (1 or 0) and
 /// the rest lengths as registers. Selects in lanes rather than stencil()'s per-edge tests, which
 /// compile to branches that mispredict wherever hinges and other edges alternate.

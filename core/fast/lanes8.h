@@ -11,9 +11,20 @@
 #define CRUMPLE_LANES8 1
 #include <immintrin.h>
 
+#include <cstddef>
+
 #include "fast/topology.h"
 
 namespace crumple::fast::lanes8 {
+
+// The fields of an EdgeRecord that the edge kernels read, as two 16-byte rows that load_at
+// transposes: (a, b, wl, wr) at the record's start and (tri1, l0, record, flags) ending at its
+// last byte (the flags' word holds the record's padding, which a reader masks away).
+constexpr std::size_t kStencilRow = 0, kRestRow = offsetof(EdgeRecord, tri1);
+static_assert(offsetof(EdgeRecord, a) == kStencilRow && offsetof(EdgeRecord, b) == kStencilRow + 4 &&
+              offsetof(EdgeRecord, wl) == kStencilRow + 8 && offsetof(EdgeRecord, wr) == kStencilRow + 12);
+static_assert(offsetof(EdgeRecord, l0) == kRestRow + 4 && offsetof(EdgeRecord, flags) == kRestRow + 12 &&
+              sizeof(EdgeRecord) == kRestRow + 16);
 
 /// Four registers, each holding row k in its low half and row k + 4 in its high half (k = 0..3)
 /// -> one register per component: x, y, z, w of the eight rows.
