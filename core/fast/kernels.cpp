@@ -6,7 +6,6 @@
 
 #include "fast/lanes8.h"
 #include "fast/wide.h"
-#include "model/random.h"
 
 #if CRUMPLE_DISABLE_SIMD
 #define CRUMPLE_SIMD_LOOP  // the no-SIMD build: no vectorization hints (and no unknown-pragma warnings)
@@ -21,17 +20,17 @@ namespace crumple::fast {
 // body taking raw arrays, wrapped by the public range function. CRUMPLE_SIMD_LOOP marks a loop
 // whose iterations are independent (`omp simd`, compiled with -fopenmp-simd: no OpenMP runtime).
 // CRUMPLE_SCALAR_KERNEL keeps the vectorizer off a kernel whose loads are random gathers (of
-// positions: the triangle pass, the adapt test, and the edge pass's fallback): scalar, because
-// Zen 4 executes vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
-// itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h).
+// positions: the triangle pass and the edge pass's fallback): scalar, because Zen 4 executes
+// vector gathers slower than the scalar loads they replace (docs/PERFORMANCE.md). The edge pass
+// itself runs eight edges in AVX lanes from 16-byte rows instead (lanes8.h), as the adapt test
+// does (kernels_adapt.cpp).
 namespace {
 // The scalar kernels prefetch the rows read by the element a fixed distance ahead: an element is
-// tens of instructions (the adapt test's hash, square root and division), so the core's reorder
-// window spans only a few elements and few of their misses overlap. The eight-lane edge pass
+// tens of instructions, so the core's reorder window spans only a few elements and few of their
+// misses overlap. The eight-lane edge pass
 // issues its 80 row loads before any arithmetic and gains nothing from a prefetch
 // (docs/PERFORMANCE.md).
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
-constexpr int kTestAhead = 32;      ///< adapt_test: six row loads an edge
 
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, const std::uint8_t* __restrict alive,
                                                const Float4* __restrict xm, float unit, Float4* __restrict area,
@@ -409,75 +408,6 @@ void advance(const Float4* g, const StepConstants& c, const float corr[3], const
   };
   if (radius > 0) run(advance_body<true>);
   else run(advance_body<false>);
-}
-
-namespace {
-// [Eq 6] and [Eq 10] for every edge. Fracture of a mesh edge: P = 1/4 c (1 - phi n_ij)(1 + phi n_rl)
-// with c = 1 - lt/l0, made per step by P_step = 1 - (1 - P)^(h/h_ref) (MODEL.md §4), against the
-// edge's counter-based random number. Restoration of an auxiliary edge: its crease (wings l, r
-// of its split) is bent across enough, (1 - n_rl)/2 >= epsilon. `exact_step`: h = h_ref, so
-// P_step = P (no pow). Scalar on purpose, as the triangle pass: its loads are random gathers of
-// four vertices' positions and normals, and an eight-lane version of it measured slower
-// (docs/PERFORMANCE.md); whether GCC vectorizes the loop at all depends on the target (it needs
-// AVX-512's masked operations and gathers), so one scalar loop keeps every machine on the same
-// code.
-template <bool exact_step>
-CRUMPLE_SCALAR_KERNEL void adapt_body(const AdaptConstants& c, const EdgeRecord* __restrict edges,
-                                      const std::int32_t* __restrict lid, const Float4* __restrict xm,
-                                      const Float4* __restrict nr, std::uint8_t* __restrict out, int begin,
-                                      int end) {
-  const std::uint64_t seed_step = mix64(mix64(c.seed ^ 0x9e3779b97f4a7c15ULL) ^ c.step);
-  const float phi = c.phi, epsilon = c.epsilon, floor_length = c.floor_length, exponent = c.step_exponent,
-              budget = c.budget, unit = c.unit;
-  const bool fracture = c.fracture, restoration = c.restoration;
-  // A missing wing (-1) reads vertex 0's row instead, masked below: no branch on the wings.
-  auto wing = [](int w) { return w & ~(w >> 31); };
-  for (int e = begin; e < end; ++e) {
-    if (e + kTestAhead < end) {
-      const EdgeRecord& next = edges[e + kTestAhead];
-      for (int v : {next.a, next.b}) __builtin_prefetch(&xm[v]), __builtin_prefetch(&nr[v]);
-      __builtin_prefetch(&nr[wing(next.wl)]), __builtin_prefetch(&nr[wing(next.wr)]);
-    }
-    const EdgeRecord& edge = edges[e];
-    const int a = edge.a, b = edge.b;
-    const int l = wing(edge.wl), r = wing(edge.wr);
-    const bool two_wings = (edge.wl >= 0) & (edge.wr >= 0);
-    // Lengths in units of 1/unit (a power of two: the same bits of comp), so that a tiny mesh's
-    // squared lengths stay normal floats (issue 14 defect 2: at 1e-25 they were 0, c = 1, and
-    // every compressed edge broke at once).
-    const Float4 pa = xm[a], pb = xm[b], na = nr[a], nb = nr[b], nl = nr[l], nrr = nr[r];
-    const float dx = (pa.x - pb.x) * unit, dy = (pa.y - pb.y) * unit, dz = (pa.z - pb.z) * unit;
-    const float lt = std::sqrt(dx * dx + dy * dy + dz * dz), rest = edge.l0 * unit;
-    const float comp = 1.0f - lt / rest;
-    const float nij = na.x * nb.x + na.y * nb.y + na.z * nb.z;
-    const float dot_rl = nrr.x * nl.x + nrr.y * nl.y + nrr.z * nl.z;  // l, r are 0 without wings
-    const float nrl = two_wings ? dot_rl : 1.0f;
-    const float P = 0.25f * comp * (1 - phi * nij) * (1 + phi * nrl);
-    // P is clamped to [0, 1] only for the pow: with P_step = P the test (P > 0) & (u < P), u in
-    // [0, 1), decides the same for P and its clamp (NaN too). The budget's factor (D22, in
-    // [0, 1]) keeps that true: P <= 1 up to round-off (c <= 1, each bracket <= 2), and a factor
-    // of exactly 1 changes no bit.
-    const float Pstep = budget * (exact_step ? P : 1.0f - std::pow(1.0f - std::fmin(std::fmax(P, 0.0f), 1.0f), exponent));
-    // uniform(seed, step, e, Fracture) of model/random.h, its first two mixes hoisted.
-    // Keyed by the logical id: the same stream whatever the slot order (layout.h).
-    const std::uint64_t h = mix64(seed_step ^ (std::uint64_t(std::uint32_t(lid[e])) << 2 | std::uint64_t(Draw::Fracture)));
-    const float u = float(h >> 40) * (1.0f / 16777216.0f);  // 24 bits: exact in float
-    const bool can = fracture & (edge.flags == (kAlive | kMesh | kBreakable)) & (edge.l0 >= floor_length) & (lt < rest);
-    const bool breaks = can & (Pstep > 0) & (u < Pstep);
-    const bool restores = restoration & (edge.flags == kAlive) & (edge.record >= 0) & ((1.0f - nrl) * 0.5f >= epsilon);
-    out[e] = std::uint8_t(breaks) | std::uint8_t(std::uint8_t(restores & !breaks) << 1);  // 1, 2 or 0
-  }
-}
-}  // namespace
-
-void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, int begin, int end) {
-  const Vertices& V = m.V;
-  const Edges& E = m.E;
-  auto run = [&](auto body) {
-    body(c, E.slots.data(), E.lid.data(), V.xm.data(), V.nr.data(), out, begin, end);
-  };
-  if (c.step_exponent == 1.0f) run(adapt_body<true>);
-  else run(adapt_body<false>);
 }
 
 }  // namespace crumple::fast
