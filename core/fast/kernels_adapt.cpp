@@ -141,7 +141,7 @@ inline __m256 step_probability(__m256 P, const AdaptConstants& c) {
 
 // The test eight edges at a time: every lane the scalar form's operations in its order.
 template <bool exact_step>
-void adapt_body(const AdaptConstants& c, const EdgeRecord* __restrict edges, const std::int32_t* __restrict lid,
+void adapt_test_body(const AdaptConstants& c, const EdgeRecord* __restrict edges, const std::int32_t* __restrict lid,
                 const Float4* __restrict xm, const Float4* __restrict nr, std::uint8_t* __restrict out, int begin,
                 int end) {
   const std::uint64_t seed_step = seed_and_step(c);
@@ -180,7 +180,7 @@ constexpr int kTestAhead = 32;  ///< six row loads an edge
 
 // The test one edge at a time (a target without AVX2, or the no-SIMD build).
 template <bool exact_step>
-void adapt_body(const AdaptConstants& c, const EdgeRecord* __restrict edges, const std::int32_t* __restrict lid,
+void adapt_test_body(const AdaptConstants& c, const EdgeRecord* __restrict edges, const std::int32_t* __restrict lid,
                 const Float4* __restrict xm, const Float4* __restrict nr, std::uint8_t* __restrict out, int begin,
                 int end) {
   const std::uint64_t seed_step = seed_and_step(c);
@@ -225,8 +225,8 @@ void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, i
   const Vertices& V = m.V;
   const Edges& E = m.E;
   auto run = [&](auto body) { body(c, E.slots.data(), E.lid.data(), V.xm.data(), V.nr.data(), out, begin, end); };
-  if (c.step_exponent == 1.0f) run(adapt_body<true>);
-  else run(adapt_body<false>);
+  if (c.step_exponent == 1.0f) run(adapt_test_body<true>);
+  else run(adapt_test_body<false>);
 }
 
 }  // namespace crumple::fast

@@ -7,11 +7,11 @@
 # constant read through a pointer in the loop) fails here with its name.
 set -euo pipefail
 lib=$1 mode=$2
-# Vectorized loops (omp simd), wide-row sums (wide.h) and the edge pass's AVX lanes (lanes8.h).
-# The triangle pass and the adapt test are scalar on purpose (kernels.cpp says why) and not
+# Vectorized loops (omp simd), wide-row sums (wide.h) and the AVX lanes (lanes8.h) of the edge
+# pass and the adapt test. The triangle pass is scalar on purpose (kernels.cpp says why) and not
 # listed. advance holds one loop per scene kind (with and without the sphere), each branch-free:
 # a branch inside would keep an AVX2 target's vectorizer off it (no masked operations).
-kernels=(advance edge_forces gather_forces jacobi_sweep vertex_normals)
+kernels=(adapt_test advance edge_forces gather_forces jacobi_sweep vertex_normals)
 command -v objdump > /dev/null || { echo "check_simd: objdump not found (package binutils)"; exit 1; }
 dump=$(objdump -d -C --no-show-raw-insn "$lib")
 status=0
