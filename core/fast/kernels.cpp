@@ -27,9 +27,8 @@ namespace crumple::fast {
 namespace {
 // The scalar kernels prefetch the rows read by the element a fixed distance ahead: an element is
 // tens of instructions, so the core's reorder window spans only a few elements and few of their
-// misses overlap. The eight-lane edge pass
-// issues its 80 row loads before any arithmetic and gains nothing from a prefetch
-// (docs/PERFORMANCE.md).
+// misses overlap. The eight-lane edge pass issues its 80 row loads before any arithmetic and
+// gains nothing from a prefetch (docs/PERFORMANCE.md).
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
 
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, const std::uint8_t* __restrict alive,

@@ -6,7 +6,8 @@
 //
 // With AVX2 the test runs eight edges at a time in lanes (lanes8.h: the records and the rows
 // transposed, the hash in 64-bit lanes); elsewhere one edge at a time. Both apply the same
-// operations in the same order to each edge, so they make the same decisions.
+// operations in the same order to each edge, so both make the same decisions (as far as the
+// compiler contracts the same products into FMAs, which a build's target decides: D33).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
