@@ -11,7 +11,8 @@
 # Usage: scripts/bench.sh [--quick] [--out DIR] [-- extra crumple_bench flags]
 #   --quick   N <= 256 and fewer, shorter repetitions (6-22 minutes by machine: README); writes to
 #             results/<machine-tag>/quick/ and leaves results/frame_time.png alone
-#   --out DIR write the results there instead (results/frame_time.png is then not touched)
+#   --out DIR write the results there instead (results/frame_time.png is then not touched);
+#             refused if DIR/run.json records another machine's run
 # Environment: CRUMPLE_BENCH_BUILD (build folder, default build-bench), CRUMPLE_BENCH_REPS,
 #   CRUMPLE_BENCH_MIN_TIME (seconds, a plain number) override the mode's defaults.
 set -euo pipefail
@@ -38,19 +39,6 @@ source "$root/scripts/bench_build.sh"
 # is read after the two builds, whose compilers still weigh in the 1-minute average.
 read -r load1 load5 load15 _ < /proc/loadavg
 bench_setup
-# What competes for the CPUs now (the load average still carries work that ended a minute ago):
-# the busy and stolen shares of all CPUs' time over a few seconds, after the set-up's installs.
-cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3) || cpu_use='{}'  # a reading, not worth stopping for
-echo "bench.sh: configuring and building crumple_bench (Release) in $build"
-build_bench "$build" crumple_bench
-bin=$build/bench/crumple_bench
-# The same kernels without vectorization (CRUMPLE_DISABLE_SIMD): its fast backend is labelled
-# fast-nosimd, so the report shows scalar -> SIMD -> two threads from one run.
-nosimd_build=${build}-nosimd
-echo "bench.sh: building the no-SIMD variant in $nosimd_build"
-build_bench "$nosimd_build" crumple_bench -DCRUMPLE_DISABLE_SIMD=ON
-nosimd_bin=$nosimd_build/bench/crumple_bench
-
 tag=$("$py" "$root/scripts/machine_info.py" --tag)
 if ((quick)); then
   reps=${CRUMPLE_BENCH_REPS:-3}
@@ -65,6 +53,23 @@ else
   filter='.'
   dest=${out:-$root/results/$tag}
 fi
+# A results folder holds one machine's runs: refuse, before the builds, an --out folder whose
+# run.json names another machine (a VM's kind can change between sessions).
+problem=$("$py" "$root/scripts/machine_info.py" --check-folder "$dest" 2>&1) ||
+  { echo "bench.sh: ${problem#machine_info.py: }" >&2; exit 2; }
+# What competes for the CPUs now (the load average still carries work that ended a minute ago):
+# the busy and stolen shares of all CPUs' time over a few seconds, after the set-up's installs.
+cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3) || cpu_use='{}'  # a reading, not worth stopping for
+echo "bench.sh: configuring and building crumple_bench (Release) in $build"
+build_bench "$build" crumple_bench
+bin=$build/bench/crumple_bench
+# The same kernels without vectorization (CRUMPLE_DISABLE_SIMD): its fast backend is labelled
+# fast-nosimd, so the report shows scalar -> SIMD -> two threads from one run.
+nosimd_build=${build}-nosimd
+echo "bench.sh: building the no-SIMD variant in $nosimd_build"
+build_bench "$nosimd_build" crumple_bench -DCRUMPLE_DISABLE_SIMD=ON
+nosimd_bin=$nosimd_build/bench/crumple_bench
+
 mkdir -p "$dest"
 json=$dest/frame.json
 

@@ -11,6 +11,10 @@
                             prints a JSON object: the share of all CPUs' time that was busy,
                             and the share the hypervisor stole, over the next SECONDS (from
                             /proc/stat; empty where it cannot be read)
+  machine_info.py --check-folder DIR
+                            exits 2 with a one-line error if DIR/run.json records a run on a
+                            machine of another tag (a results folder holds one machine's runs);
+                            silent if DIR has no run.json or this machine's tag
 """
 import json
 import os
@@ -204,6 +208,23 @@ def sample_cpu_use(seconds):
     return cpu_use(before, read(), seconds)
 
 
+def folder_conflict(folder, this_tag):
+    """Why a run on the machine tagged this_tag must not write into folder, or None: its
+    run.json names another machine's tag, or cannot be read. A folder without run.json is free."""
+    path = os.path.join(folder, "run.json")
+    if not os.path.exists(path):
+        return None
+    try:
+        with open(path) as f:
+            theirs = json.load(f)["machine"]["tag"]
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        return f"{path} cannot be read ({type(e).__name__}: {e}); choose another folder"
+    if theirs == this_tag:
+        return None
+    return (f"{folder} holds a run on {theirs} (its run.json), this machine is {this_tag}: "
+            f"choose another folder (without --out: results/{this_tag})")
+
+
 if __name__ == "__main__":
     if sys.argv[1:] == ["--tag"]:
         print(tag())
@@ -211,6 +232,11 @@ if __name__ == "__main__":
         print(json.dumps(describe(), indent=2))
     elif len(sys.argv) == 3 and sys.argv[1] == "--cpu-use" and re.fullmatch(r"\d+(\.\d+)?", sys.argv[2]):
         print(json.dumps(sample_cpu_use(float(sys.argv[2]))))
+    elif len(sys.argv) == 3 and sys.argv[1] == "--check-folder":
+        problem = folder_conflict(sys.argv[2], tag())
+        if problem:
+            print(f"machine_info.py: {problem}", file=sys.stderr)
+            sys.exit(2)
     else:
         print(__doc__, file=sys.stderr)
         sys.exit(2)

@@ -4,9 +4,12 @@ other's results; AMD family 19h's Zen 3 and Zen 4 model ranges confused; a gener
 to a name that has a model number (the folder of a named CPU would change for nothing); an Intel
 model number read without its family 6, or a client core (model 151, Alder Lake) taken for a
 server one; a clock in the name ("@ 2.20GHz") taken for a model number. Class CpuUse names its
-own."""
+own, as does class Folder."""
+import json
 import os
+import subprocess
 import sys
+import tempfile
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "scripts"))
@@ -64,6 +67,54 @@ class CpuUse(unittest.TestCase):
         self.assertEqual(machine_info.cpu_use(None, (1, 2, 3), 3), {})
         self.assertEqual(machine_info.cpu_use((1, 2, 3), (1, 2, 3), 0), {})  # no time between: no shares
         self.assertIsNone(machine_info.cpu_times("intr 5\n"))
+
+
+class Folder(unittest.TestCase):
+    """scripts/bench.sh's guard against writing one machine's run into another's results folder.
+    Wrong code this catches: the tags compared the wrong way (a folder of this machine refused, or
+    another's accepted), a folder without run.json refused (a new --out folder could never be
+    used), an unreadable run.json taken as free (a crash or an overwrite), a refusal that exits 0
+    or prints more than one line."""
+
+    SCRIPT = os.path.join(os.path.dirname(__file__), "..", "..", "scripts", "machine_info.py")
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+        self.folder = self.dir.name
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def write_run(self, text):
+        with open(os.path.join(self.folder, "run.json"), "w") as f:
+            f.write(text)
+
+    def test_a_folder_without_a_run_is_free(self):
+        self.assertIsNone(machine_info.folder_conflict(self.folder, "intel-xeon-icx_avx512"))
+
+    def test_only_this_machines_tag_may_write(self):
+        self.write_run(json.dumps({"machine": {"tag": "amd-epyc-zen5_avx512"}}))
+        self.assertIsNone(machine_info.folder_conflict(self.folder, "amd-epyc-zen5_avx512"))
+        problem = machine_info.folder_conflict(self.folder, "intel-xeon-icx_avx512")
+        self.assertIn("amd-epyc-zen5_avx512", problem)
+        self.assertIn("results/intel-xeon-icx_avx512", problem)
+
+    def test_an_unreadable_run_is_refused(self):
+        for text in ("{not json", json.dumps({"mode": "full"}), json.dumps([1])):
+            self.write_run(text)
+            self.assertIn("cannot be read", machine_info.folder_conflict(self.folder, "x_avx2"))
+
+    def test_the_command_exits_2_with_one_line(self):
+        self.write_run(json.dumps({"machine": {"tag": "no-such-machine_sse"}}))
+        bad = subprocess.run([sys.executable, self.SCRIPT, "--check-folder", self.folder],
+                             capture_output=True, text=True)
+        self.assertEqual(bad.returncode, 2)
+        self.assertEqual(len(bad.stderr.strip().splitlines()), 1, bad.stderr)
+        self.assertIn("no-such-machine_sse", bad.stderr)
+        os.remove(os.path.join(self.folder, "run.json"))
+        free = subprocess.run([sys.executable, self.SCRIPT, "--check-folder", self.folder],
+                              capture_output=True, text=True)
+        self.assertEqual((free.returncode, free.stderr), (0, ""))
 
 
 if __name__ == "__main__":
