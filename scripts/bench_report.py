@@ -12,7 +12,8 @@ adds are recomputed here from the repetitions), and writes to DIR (default: the 
   passes.png      per-pass breakdown, only when BM_Pass/<pass>/<backend>/<threads>/<N> exist
   roofline.png    each pass's achieved GB/s (bytes counted from the layout over its time)
                   against BM_Stream's measured bandwidth, when both exist
-  REPORT.md       machine, how it was run, table, largest sheet within 60/30 fps, the charts
+  REPORT.md       machine, how it was run, table, largest sheet within 60/30 fps, the fast
+                  backend against its performance targets (scripts/bench_targets.py), the charts
 --headline also copies frame_time.png there (results/frame_time.png, shown by the README).
 """
 import argparse
@@ -29,7 +30,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-import machine_info  # noqa: E402  (beside this script)
+import bench_targets  # noqa: E402  (beside this script)
+import machine_info  # noqa: E402
 
 FRAME = re.compile(r"^BM_Frame/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
 FROZEN = re.compile(r"^BM_Frozen/(?P<backend>[^/]+)/(?P<threads>\d+)/(?P<n>\d+)(?:/[a-z_]+)?$")
@@ -915,6 +917,36 @@ def per_vertex_section(series, context):
     return lines
 
 
+def targets_section(benches, series):
+    """The performance targets' section (scripts/bench_targets.py) from this report's numbers."""
+    stream = stream_bandwidth(benches)
+    frozen_series = frame_series(benches, FROZEN)
+    frozen = {key: {n: (b.median(), b.counter("vertices"), b.counter("bytes") / (roof(stream, key[1]) * 1e9) * 1e3)
+                    for n, b in by_n.items()} for key, by_n in frozen_series.items()}
+    events = {}
+    for name, b in benches.items():
+        m = EVENTS.match(name)
+        if m and b.times:
+            key = config_key(m["backend"], m["threads"])
+            events.setdefault(key, {})[int(m["n"])] = (b.counter("us_per_event"), event_floor_us(b, stream, key[1]))
+    minus = {}
+    for key, n, frame, frz, count, thawed in event_cost_rows(frame_series(benches, STEPS) or series, frozen_series):
+        if count > 0 and not thawed:
+            minus.setdefault(key, {})[n] = 1000.0 * (frame - frz) / count
+    per_vertex = {key: {n: ratio for n, _, ratio in cells if ratio} for key, cells in per_vertex_rows(series)}
+    pairs = {}
+    for backend, n, *rest in pair_rows(benches):  # a benchmark's first row is over all its repetitions
+        if backend == bench_targets.BACKEND:
+            pairs.setdefault(n, rest[3])
+    frames = {}
+    for key, by_n in series.items():
+        for n, b in by_n.items():
+            floor = frozen.get(key, {}).get(n, (0, 0, float("nan")))[2]
+            per_event = events.get(key, {}).get(n, (0, float("nan")))[1]
+            frames.setdefault(key, {})[n] = (b.median(), floor + (b.counter("splits") + b.counter("restores")) * per_event * 1e-3)
+    return bench_targets.section(frozen, events, minus, per_vertex, pairs, frames)
+
+
 def speedup_section(series, charts):
     """Each step of the chain reference -> no SIMD -> SIMD -> two threads, per N."""
     chain, steps, sizes, table = speedup_steps(series)
@@ -971,6 +1003,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     lines += how_run_section(run, context)
     lines += frame_time_section(series, charts)
     lines += budget_section(series, context)
+    lines += targets_section(benches, series)
     lines += per_vertex_section(series, context)
     lines += speedup_section(series, charts)
     lines += pair_section(benches, context)
