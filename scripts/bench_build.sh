@@ -45,20 +45,24 @@ probe_options() {
   done
 }
 
-# probe_begin TARGET NAME: installs what a fresh machine lacks, builds TARGET in the bench build
+# probe_begin TARGET NAME: installs what a fresh machine lacks, refuses an `out` in another
+# machine's results folder (machine_info.py --check-folder), builds TARGET in the bench build
 # and sets `probe` (its path), `out` (results/<machine-tag>/NAME.txt unless already set) and
 # `tmp`, the file the run collects into (removed on exit unless probe_end moves it), headed by
 # the script, the revision, the time, the CPU, the load average (which still carries the build)
 # and the CPUs' busy and stolen shares over the 3 s after the build (what competes now).
 probe_begin() {
   bench_setup
+  local tag use problem seconds=3
+  tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
+  out=${out:-$root/results/$tag/$2.txt}
+  # As bench.sh: no file into a results folder whose run.json records another machine's run.
+  problem=$(/usr/bin/python3 "$root/scripts/machine_info.py" --check-folder "$(dirname "$out")" 2>&1) ||
+    { echo "$(basename "$0"): ${problem#machine_info.py: }" >&2; exit 2; }
   build_bench "$build" "$1"
   # shellcheck disable=SC2034  # read by the caller
   probe=$build/bench/$1
-  local tag use seconds=3
-  tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
   use=$(/usr/bin/python3 "$root/scripts/machine_info.py" --cpu-use "$seconds") || use='{}'
-  out=${out:-$root/results/$tag/$2.txt}
   mkdir -p "$(dirname "$out")"
   tmp=$(mktemp)
   trap 'rm -f "$tmp"' EXIT
