@@ -473,6 +473,12 @@ def roofline_section(benches, charts):
 CACHED_N = 128
 
 
+def frozen_floor_ms(b, stream, threads):
+    """The time a frozen benchmark's counted bytes take at the best streaming kernel on its
+    thread count (nan without BM_Stream there)."""
+    return b.counter("bytes") / (roof(stream, threads) * 1e9) * 1e3
+
+
 def frozen_floor_table(frozen, fresh, stream):
     """The frozen step against its bandwidth floor, as prepared and (BM_FrozenFresh, where
     measured) just after a relayout."""
@@ -492,7 +498,7 @@ def frozen_floor_table(frozen, fresh, stream):
     ns_cached = {key: b.median() * 1e6 / b.counter("vertices") for key, n, b in frozen if n == CACHED_N}
     for key, n, b in sorted(frozen, key=lambda r: (keys.index(r[0]), r[1])):
         ms, by, v = b.median(), b.counter("bytes"), b.counter("vertices")
-        floor = by / (roof(stream, key[1]) * 1e9) * 1e3  # nan without BM_Stream on that thread count
+        floor = frozen_floor_ms(b, stream, key[1])
         bound = (f"{floor:.3g} | {ms / floor:.1f}x") if math.isfinite(floor) else "- | -"
         ns = ms * 1e6 / v
         cached = f"{ns / ns_cached[key]:.2f}x" if key in ns_cached else "-"
@@ -656,6 +662,12 @@ def largest_within(series_for_config, budget_ms):
     if not fits:
         return None
     return max(fits, key=lambda nb: nb[0])
+
+
+def event_cost_series(benches, series):
+    """The frames the frozen ones are subtracted from: BM_Steps (bare steps), or BM_Frame in runs
+    from before BM_Steps existed."""
+    return frame_series(benches, STEPS) or series
 
 
 def event_cost_rows(series, frozen):
@@ -919,31 +931,28 @@ def per_vertex_section(series, context):
 
 def targets_section(benches, series):
     """The performance targets' section (scripts/bench_targets.py) from this report's numbers."""
-    stream = stream_bandwidth(benches)
+    stream, nan = stream_bandwidth(benches), float("nan")
     frozen_series = frame_series(benches, FROZEN)
-    frozen = {key: {n: (b.median(), b.counter("vertices"), b.counter("bytes") / (roof(stream, key[1]) * 1e9) * 1e3)
-                    for n, b in by_n.items()} for key, by_n in frozen_series.items()}
-    events = {}
-    for name, b in benches.items():
-        m = EVENTS.match(name)
-        if m and b.times:
-            key = config_key(m["backend"], m["threads"])
-            events.setdefault(key, {})[int(m["n"])] = (b.counter("us_per_event"), event_floor_us(b, stream, key[1]))
+    frozen = {key: {n: (b.median(), b.counter("vertices"), frozen_floor_ms(b, stream, key[1])) for n, b in by_n.items()}
+              for key, by_n in frozen_series.items()}
+    events = {key: {n: (b.counter("us_per_event"), event_floor_us(b, stream, key[1])) for n, b in by_n.items()}
+              for key, by_n in frame_series(benches, EVENTS).items()}
     minus = {}
-    for key, n, frame, frz, count, thawed in event_cost_rows(frame_series(benches, STEPS) or series, frozen_series):
+    for key, n, frame, frz, count, thawed in event_cost_rows(event_cost_series(benches, series), frozen_series):
         if count > 0 and not thawed:
             minus.setdefault(key, {})[n] = 1000.0 * (frame - frz) / count
     per_vertex = {key: {n: ratio for n, _, ratio in cells if ratio} for key, cells in per_vertex_rows(series)}
     pairs = {}
-    for backend, n, *rest in pair_rows(benches):  # a benchmark's first row is over all its repetitions
+    for backend, n, _placement, _ms1, _ms2, speedup, *_ in pair_rows(benches):
         if backend == bench_targets.BACKEND:
-            pairs.setdefault(n, rest[3])
+            pairs.setdefault(n, speedup)  # a benchmark's first row is over all its repetitions
     frames = {}
     for key, by_n in series.items():
         for n, b in by_n.items():
-            floor = frozen.get(key, {}).get(n, (0, 0, float("nan")))[2]
-            per_event = events.get(key, {}).get(n, (0, float("nan")))[1]
-            frames.setdefault(key, {})[n] = (b.median(), floor + (b.counter("splits") + b.counter("restores")) * per_event * 1e-3)
+            steps_floor = frozen.get(key, {}).get(n, (nan, nan, nan))[2]
+            event_floor = events.get(key, {}).get(n, (nan, nan))[1]
+            count = b.counter("splits") + b.counter("restores")
+            frames.setdefault(key, {})[n] = (b.median(), steps_floor + count * event_floor * 1e-3)
     return bench_targets.section(frozen, events, minus, per_vertex, pairs, frames)
 
 
@@ -1007,7 +1016,7 @@ def report(json_path, run, context, benches, out_dir, charts):
     lines += per_vertex_section(series, context)
     lines += speedup_section(series, charts)
     lines += pair_section(benches, context)
-    lines += event_cost_section(frame_series(benches, STEPS) or series, frame_series(benches, FROZEN))
+    lines += event_cost_section(event_cost_series(benches, series), frame_series(benches, FROZEN))
     lines += events_section(benches)
     lines += default_section(frame_series(benches, DEFAULT), series)
     lines += roofline_section(benches, charts)

@@ -222,7 +222,8 @@ def folder_conflict(folder, this_tag):
     if theirs == this_tag:
         return None
     return (f"{folder} holds a run on {theirs} (its run.json), this machine is {this_tag}: "
-            f"choose another folder (without --out: results/{this_tag})")
+            f"choose another folder (without --out: results/{this_tag}), or remove its run.json if that run "
+            f"was this machine's under an older tag")
 
 
 if __name__ == "__main__":

@@ -1,9 +1,11 @@
 """REPORT.md's performance targets (scripts/bench_targets.py, wired by scripts/bench_report.py's
 targets_section) on synthetic numbers. Wrong code this catches: a goal compared the wrong way
 (BM_Pair's speed-up must reach its goal, the times stay under theirs), the one- and two-thread
-event goals swapped, a goal called out of reach whose floor is below it (or one whose floor is
-above it only "not met"), a value printed equal to its goal while the verdict says it misses it,
-the frame's floor without its events, the floors taken from another thread count's bandwidth."""
+event goals swapped, a goal called out of reach whose floor is below it (or one whose bandwidth
+floor is above it only "not met"), a modelled floor (events, the frame) taken for a bound, a
+value printed equal to its goal while the verdict says it misses it, the frame's floor without
+its events, the floors taken from another thread count's bandwidth, the events' cost taken from
+the API's frames instead of the bare steps, BM_Pair's times read as its speed-up."""
 import os
 import sys
 import unittest
@@ -41,10 +43,16 @@ class Verdicts(unittest.TestCase):
     def test_each_thread_count_has_its_event_goal(self):
         events = {("fast", 2): {256: (1.2, 0.5)}, ("fast", 1): {256: (1.2, 0.9), 512: (2.0, 1.6)}}
         rows = rows_of(bench_targets.section({}, events, {("fast", 2): {512: 0.9}}, {}, {}, {}))
-        self.assertEqual(rows["`BM_Events`, 2t, N = 256: us an event"], ("1.20", "<= 1", "0.50", "not met"))
-        self.assertEqual(rows["`BM_Events`, 1t, N = 256: us an event"], ("1.20", "<= 1.5", "0.90", "met"))
-        self.assertEqual(rows["`BM_Events`, 1t, N = 512: us an event"][3], "out of reach here (floor above the goal)")
+        self.assertEqual(rows["`BM_Events`, 2t, N = 256: us an event"], ("1.20", "<= 1", "0.50 (model)", "not met"))
+        self.assertEqual(rows["`BM_Events`, 1t, N = 256: us an event"], ("1.20", "<= 1.5", "0.90 (model)", "met"))
+        # An event's floor is a model that cached lines beat: never "out of reach".
+        self.assertEqual(rows["`BM_Events`, 1t, N = 512: us an event"][3], "not met")
         self.assertEqual(rows["frame minus frozen over events, 2t, N = 512: us an event"], ("0.90", "<= 1", "-", "met"))
+
+    def test_digits_enough_to_tell_a_value_from_its_goal(self):
+        self.assertEqual(bench_targets.shown(30.04, 30.0, digits=1), "30.04")
+        self.assertEqual(bench_targets.shown(30.0, 30.0, digits=1), "30.0")
+        self.assertEqual(bench_targets.shown(1.3000000001, 1.3, "x"), "1.3000000001x")  # past six decimals
 
     def test_a_miss_by_less_than_the_last_digit_shows_one_more(self):
         rows = rows_of(bench_targets.section({}, {}, {}, {("fast", 2): {512: 1.304, 1024: 1.3}, ("fast", 1): {512: 1.5}},
@@ -62,10 +70,10 @@ class Verdicts(unittest.TestCase):
     def test_the_paper_frame_and_the_moonshot(self):
         frame = lambda ms, floor: rows_of(bench_targets.section({}, {}, {}, {}, {}, {("fast", 2): {512: (ms, floor)}}))[
             "paper's frame, 2t, N = 512: ms"]
-        self.assertEqual(frame(30.0, 20.0), ("30.0", "<= 33 (moonshot 16.7)", ">= 20.0", "met"))
+        self.assertEqual(frame(30.0, 20.0), ("30.0", "<= 33 (moonshot 16.7)", "20.0 (model)", "met"))
         self.assertEqual(frame(16.0, NAN)[2:], ("-", "met; the 60 fps moonshot met"))
-        self.assertEqual(frame(50.0, 40.0)[3], "out of reach here (floor above the goal)")
-        self.assertEqual(frame(50.0, 20.0)[3], "not met")
+        self.assertEqual(frame(50.0, 40.0)[3], "not met")  # its floor is a model: no "out of reach"
+        self.assertEqual(frame(33.04, 20.0)[0], "33.04")  # one digit more where 33.0 would read as the goal
 
     def test_other_backends_and_no_numbers_give_no_section(self):
         self.assertEqual(bench_targets.section({("reference", 2): {256: (10.0, 1000, 1.0)}}, {}, {}, {}, {},
@@ -90,12 +98,17 @@ class FromTheBenchmarks(unittest.TestCase):
         add("BM_Frozen/fast/2/512/manual_time", 10.0, bytes=95e6, vertices=100000)  # floor 5 ms at 19 GB/s
         add("BM_Events/fast/2/512/iterations:8/manual_time", 0.002, us_per_event=2.0, event_bytes=8192.0)  # 1.024 us
         add("BM_Frame/fast/2/512/manual_time", 60.0, splits=1000.0, restores=500.0, vertices=100000)
+        add("BM_Steps/fast/2/512/manual_time", 50.0, splits=1000.0, restores=500.0)
+        add("BM_Pair/fast/2/512/manual_time", 150.0, ms_1t=100.0, ms_2t=52.6, speedup=1.9)
         rows = rows_of(bench_report.targets_section(b, bench_report.frame_series(b)))
+        # The bare steps less the frozen ones, not the API's frame: (50 - 10) ms over 1,500 events.
+        self.assertEqual(rows["frame minus frozen over events, 2t, N = 512: us an event"][0], "26.67")
+        self.assertEqual(rows["`BM_Pair` 2t against 1t, N = 512"][:2], ("1.90x", ">= 1.8x"))
         self.assertEqual(rows["frozen step, 2t, N = 512: ns a vertex"][:3], ("100.0", "<= 30", "50.0"))
         self.assertEqual(rows["frozen step, 2t, N = 512: its floor's multiple"][0], "2.00x")
-        self.assertEqual(rows["`BM_Events`, 2t, N = 512: us an event"][:3], ("2.00", "<= 1", "1.02"))
+        self.assertEqual(rows["`BM_Events`, 2t, N = 512: us an event"][:3], ("2.00", "<= 1", "1.02 (model)"))
         # 5 ms + 1,500 events x 1.024 us = 6.536 ms.
-        self.assertEqual(rows["paper's frame, 2t, N = 512: ms"][:3], ("60.0", "<= 33 (moonshot 16.7)", ">= 6.5"))
+        self.assertEqual(rows["paper's frame, 2t, N = 512: ms"][:3], ("60.0", "<= 33 (moonshot 16.7)", "6.5 (model)"))
 
 
 if __name__ == "__main__":
