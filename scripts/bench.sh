@@ -53,10 +53,7 @@ else
   filter='.'
   dest=${out:-$root/results/$tag}
 fi
-# A results folder holds one machine's runs: refuse, before the builds, an --out folder whose
-# run.json names another machine (a VM's kind can change between sessions).
-problem=$("$py" "$root/scripts/machine_info.py" --check-folder "$dest" 2>&1) ||
-  { echo "bench.sh: ${problem#machine_info.py: }" >&2; exit 2; }
+refuse_other_machine "$dest"  # before the builds
 # What competes for the CPUs now (the load average still carries work that ended a minute ago):
 # the busy and stolen shares of all CPUs' time over a few seconds, after the set-up's installs.
 cpu_use=$("$py" "$root/scripts/machine_info.py" --cpu-use 3) || cpu_use='{}'  # a reading, not worth stopping for

@@ -11,6 +11,15 @@ bench_setup() {
   build=${CRUMPLE_BENCH_BUILD:-$root/build-bench}
 }
 
+# refuse_other_machine DIR: exits 2 with machine_info.py's one-line reason, in the calling
+# script's name, when DIR/run.json records another machine's run: a results folder holds one
+# machine's runs, and a VM's kind can change between sessions.
+refuse_other_machine() {
+  local problem
+  problem=$(/usr/bin/python3 "$root/scripts/machine_info.py" --check-folder "$1" 2>&1) ||
+    { echo "$(basename "$0"): ${problem#machine_info.py: }" >&2; exit 2; }
+}
+
 # build_bench DIR TARGET [CMAKE_ARGS...]: configures DIR as a Release build of $root with the
 # benchmarks and without the tests (the configure log in DIR.cmake.log, shown if it fails) and
 # builds TARGET on every core.
@@ -53,12 +62,10 @@ probe_options() {
 # and the CPUs' busy and stolen shares over the 3 s after the build (what competes now).
 probe_begin() {
   bench_setup
-  local tag use problem seconds=3
+  local tag use seconds=3
   tag=$(/usr/bin/python3 "$root/scripts/machine_info.py" --tag)  # the python3 first on PATH may lack its imports
   out=${out:-$root/results/$tag/$2.txt}
-  # As bench.sh: no file into a results folder whose run.json records another machine's run.
-  problem=$(/usr/bin/python3 "$root/scripts/machine_info.py" --check-folder "$(dirname "$out")" 2>&1) ||
-    { echo "$(basename "$0"): ${problem#machine_info.py: }" >&2; exit 2; }
+  refuse_other_machine "$(dirname "$out")"
   build_bench "$build" "$1"
   # shellcheck disable=SC2034  # read by the caller
   probe=$build/bench/$1
