@@ -3,6 +3,8 @@
 # (bench/layout_probe.cpp; Release, -march=native) in build-bench/ and runs it for each N and
 # thread count, every fraction interleaved within each round. Writes the probe's output, with
 # the machine and revision, to results/<machine-tag>/layout_fraction.txt (or --out FILE).
+# An --out FILE in a folder whose run.json records another machine is refused before the build
+# (exit 2), as scripts/bench.sh refuses such a folder.
 #
 # Usage: scripts/layout_probe.sh [--out FILE] [--sizes "128 256 512"] [--threads "1 2"]
 #                                [--frames 52] [--rounds 3] [--fractions "0.25 0.15 0.1 0.06"]

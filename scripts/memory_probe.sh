@@ -4,6 +4,8 @@
 # count: a streaming read and random 64-byte lines over arrays from 16 MiB up (within a quarter
 # of the memory). Writes its output, with the machine and revision, to
 # results/<machine-tag>/memory.txt (or --out FILE).
+# An --out FILE in a folder whose run.json records another machine is refused before the build
+# (exit 2), as scripts/bench.sh refuses such a folder.
 #
 # Usage: scripts/memory_probe.sh [--out FILE] [--threads "1 2"] [--reps 5]
 # About 2 minutes with the defaults on the 2-vCPU Emerald Rapids VM.

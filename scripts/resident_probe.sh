@@ -3,6 +3,8 @@
 # (bench/resident_probe.cpp; Release, -march=native) in build-bench/ and runs it for each N and
 # thread count, plain and resident runs alternated within each round. Writes the probe's output,
 # with the machine and revision, to results/<machine-tag>/resident.txt (or --out FILE).
+# An --out FILE in a folder whose run.json records another machine is refused before the build
+# (exit 2), as scripts/bench.sh refuses such a folder.
 #
 # Usage: scripts/resident_probe.sh [--out FILE] [--sizes "256 512"] [--threads "2"]
 #                                  [--from 60] [--to 120] [--rounds 5]
