@@ -113,10 +113,23 @@ StepEvents FastSimulator::adapt_apply() {
   return ev;
 }
 
-// The ids, read off the candidates in event order: a split leaves its edge auxiliary, a restore
-// makes its auxiliary edge a mesh edge again, and nothing else changes either flag. (A restore
-// may free a candidate that did not split: hence the alive bit in the test.)
+// The ids of the applied events, in event order. The rounds and waves know which they applied,
+// so only those edges' ids are read: most restore candidates are not restorable (they wait on a
+// later split at their vertex n, can_restore), and a scan of every candidate's edge would read a
+// line at random for each.
 void FastSimulator::list_event_ids(StepEvents& ev) const {
+  if (serial_edits_) return list_event_ids_by_flags(ev);
+  rounds_.applied_edges(ev.split_edges);
+  waves_.applied_edges(events_.restores, ev.restored_edges);
+  for (std::vector<int>* ids : {&ev.split_edges, &ev.restored_edges})
+    for (int& e : *ids) e = topo_.E.lid[e];
+}
+
+// The same ids read off every candidate's flags (the serial edits' form, which the tests
+// compare with the rounds' and waves' lists): a split leaves its edge auxiliary, a restore makes its auxiliary
+// edge a mesh edge again, and nothing else changes either flag. (A restore may free a candidate
+// that did not split: hence the alive bit in the test.)
+void FastSimulator::list_event_ids_by_flags(StepEvents& ev) const {
   for (int e : events_.splits)
     if ((topo_.E[e].flags & (kAlive | kMesh)) == kAlive) ev.split_edges.push_back(topo_.E.lid[e]);
   for (int e : events_.restores)

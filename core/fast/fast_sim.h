@@ -158,6 +158,7 @@ class FastSimulator final : public Simulator {
   void list_events(int block, int begin, int end);
   void collect_events();
   void list_event_ids(StepEvents& ev) const;
+  void list_event_ids_by_flags(StepEvents& ev) const;
   void renew_normals();
   void mark_renewed_vertices();
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)

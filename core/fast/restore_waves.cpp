@@ -44,6 +44,10 @@ void RestoreWaves::free_ids(Topology& m) const {
   for (const auto& f : freed_) m.free_ids(f.second);
 }
 
+void RestoreWaves::applied_edges(const std::vector<int>& restores, std::vector<int>& out) const {
+  for (const auto& f : freed_) out.push_back(restores[std::size_t(f.first)]);
+}
+
 void RestoreWaves::touched(std::vector<int>& out) const {
   for (const auto& f : freed_) {
     const auto& verts = candidates_[std::size_t(f.first)].verts;

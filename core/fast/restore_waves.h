@@ -39,6 +39,9 @@ class RestoreWaves {
   void free_ids(Topology& m) const;
   /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
   void touched(std::vector<int>& out) const;
+  /// Appends the edge slot of each restore the last apply() applied (`restores` is what it
+  /// was given), in event order.
+  void applied_edges(const std::vector<int>& restores, std::vector<int>& out) const;
   /// Waves so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_waves() const { return large_waves_; }
   /// One restore the last apply() applied: its place in the pass's restore events, its wave

@@ -130,6 +130,11 @@ void SplitRounds::make_room(FastSimulator& sim) {
   }
 }
 
+void SplitRounds::applied_edges(std::vector<int>& out) const {
+  for (std::size_t k = 0; k < plans_.size(); ++k)
+    if (applied_[k]) out.push_back(plans_[k].e);
+}
+
 void SplitRounds::touched(std::vector<int>& out) const {
   for (std::size_t k = 0; k < plans_.size(); ++k) {
     if (!applied_[k]) continue;

@@ -31,6 +31,8 @@ class SplitRounds {
   int apply(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps);
   /// Appends the live vertices (i, j, l, r, n) of each split the last apply() applied.
   void touched(std::vector<int>& out) const;
+  /// Appends the edge slot of each split the last apply() applied, in event order.
+  void applied_edges(std::vector<int>& out) const;
   /// Rounds so far large enough to run as a parallel loop (tests check they happened).
   std::uint64_t large_rounds() const { return large_rounds_; }
   /// One split the last apply() applied: its place in the pass's split events, its round (1

@@ -574,6 +574,8 @@ void same_events(const std::vector<StepEvents>& a, const std::vector<StepEvents>
   for (std::size_t f = 0; f < a.size(); ++f) {
     ASSERT_EQ(a[f].splits, b[f].splits) << "frame " << f;
     ASSERT_EQ(a[f].restores, b[f].restores) << "frame " << f;
+    ASSERT_EQ(a[f].split_edges, b[f].split_edges) << "frame " << f;
+    ASSERT_EQ(a[f].restored_edges, b[f].restored_edges) << "frame " << f;
     splits += a[f].splits;
     restores += a[f].restores;
   }
