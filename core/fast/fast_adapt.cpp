@@ -1,13 +1,13 @@
 // The adaptive mesh of the fast backend (MODEL.md §4, §5, §7), the topology pass: decisions by
 // the adapt_test kernel in parallel, then the events in the order of the reference backend
 // (splits in parallel rounds, split_rounds.h; restores in parallel waves, restore_waves.h; each
-// with the serial result of serial_events.h), then the areas and normals renewed where
-// triangles changed. One event's edits are in fast_edits.cpp.
+// with the serial result of serial_events.h); each event computes its triangles' areas, and
+// the rounds and waves renew the normals event by event (the serial edits after all events).
+// One event's edits are in fast_edits.cpp.
 #include <algorithm>
 #include <bit>
 #include <cmath>
 
-#include "fast/event_prefetch.h"
 #include "fast/fast_sim.h"
 #include "fast/pass_timer.h"
 #include "fast/radix.h"
@@ -23,11 +23,6 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 /// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
 constexpr int kTestBlock = 4096;
 static_assert(kTestBlock % Parallel::kLanes == 0);
-/// The renewal scans every vertex's stamp for the few it renews: chunks of many slots, each
-/// in parts of kRenewPart slots whose marked vertices are listed on the stack.
-constexpr int kRenewGrain = 8192;
-constexpr int kRenewPart = 512;
-
 /// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
 /// digit radix passes (radix.h) between keys and spare: a few streaming passes where a
 /// comparison sort of the step's thousands of keys costs a dozen compares a key.
@@ -89,27 +84,21 @@ StepEvents FastSimulator::adapt_apply() {
   if (params_.max_vertices > 0)  // the hard guard, as the reference: the budget's first candidates
     splits.resize(std::min<std::size_t>(splits.size(), std::max(0, params_.max_vertices - topo_.live_vertices())));
   StepEvents ev;
-  touched_.clear();
   if (serial_edits_) {
+    touched_.clear();
     ev.splits = SerialEvents::splits(*this, splits, stamps_, touched_);
     ev.restores = SerialEvents::restores(*this, events_.restores, stamps_, touched_);
+    renew_normals_of_touched();
+    list_event_ids_by_flags(ev);
   } else {
+    // The rounds and waves renewed the normals event by event. What is left touches two
+    // disjoint sets of data, so it runs side by side: the freed ids onto the free lists, and
+    // the events' ids for the caller.
     ev.splits = rounds_.apply(*this, splits, stamps_);
     ev.restores = waves_.apply(*this, events_.restores, stamps_);
+    par_.invoke([&] { waves_.free_ids(topo_); }, [&] { list_event_ids(ev); });
   }
-  // What is left touches two disjoint sets of data, so the serial parts run side by side: the
-  // freed ids onto the free lists and the events' ids for the caller on one thread; the
-  // vertices to renew listed, then their normals renewed, on the other (a parallel loop the
-  // first thread joins when it is done).
-  par_.invoke(
-      [&] {
-        if (!serial_edits_) waves_.free_ids(topo_);
-        list_event_ids(ev);
-      },
-      [&] {
-        if (!serial_edits_) rounds_.touched(touched_), waves_.touched(touched_);
-        renew_normals();
-      });
+  normals_valid_ = true;
   return ev;
 }
 
@@ -118,7 +107,6 @@ StepEvents FastSimulator::adapt_apply() {
 // later split at their vertex n, can_restore), and a scan of every candidate's edge would read a
 // line at random for each.
 void FastSimulator::list_event_ids(StepEvents& ev) const {
-  if (serial_edits_) return list_event_ids_by_flags(ev);
   rounds_.applied_edges(ev.split_edges);
   waves_.applied_edges(events_.restores, ev.restored_edges);
   for (std::vector<int>* ids : {&ev.split_edges, &ev.restored_edges})
@@ -154,41 +142,12 @@ void FastSimulator::collect_events() {
   }
 }
 
-void FastSimulator::renew_normals() {
-  // Bring the normals computed for the decisions up to date where the topology changed, so the
-  // next step need not recompute them all: the normal of each corner of a live changed triangle,
-  // once (each normal is a function of the areas alone, so the order changes nothing). The
-  // changed triangles' areas are current: each split and restore computed its own.
-  mark_renewed_vertices();
-  // In slot order, a scan of the stamps: the layout keeps a vertex's list and its triangles'
-  // areas near its neighbours' (layout.h), so the renewed vertices share lines that in event
-  // order each would miss alone. A part's marked vertices are listed first, so that the loop
-  // can prefetch kNear on: the vertex's list head and its list (not the areas the list names:
-  // prefetching them too made the renewal slower, docs/PERFORMANCE.md).
-  const Vertices& V = topo_.V;
-  Float4* normals = topo_.V.nr.data();
-  par_.run(V.size(), kRenewGrain, [&](int b, int e) {
-    int marked[kRenewPart];
-    for (int first = b; first < e; first += kRenewPart) {
-      int n = 0;
-      vertex_stamps_.for_each_marked(first, std::min(e, first + kRenewPart), [&](int v) { marked[n++] = v; });
-      for (int k = 0; k < n; ++k) {
-        if (k + kNear < n) prefetch_read(&V.tri_list[marked[k + kNear]]), prefetch_read(topo_.tris_of(marked[k + kNear]));
-        vertex_normals(topo_, normals, marked[k], marked[k] + 1);
-      }
-    }
-  });
-  normals_valid_ = true;
-}
-
-// The vertices of the pass's applied events: the corners of its live changed triangles (a
-// split's i, j, l, r and n; a restore's i, j, l, r), listed by the events from their own compact
-// records rather than read back from each changed triangle, marked in the vertex stamps
-// (serial: a vertex of several events is marked by each, where a parallel mark would race).
-void FastSimulator::mark_renewed_vertices() {
-  vertex_stamps_.begin_pass();
-  vertex_stamps_.cover(std::size_t(topo_.V.size()));
-  for (int v : touched_) vertex_stamps_.mark(v);  // one byte a vertex: the stamps stay in L2
+// The serial edits' renewal (the oracle of the rounds' and waves' renewal event by event): after
+// all the events, the normal of each vertex an event changed a triangle at, once or more (each
+// normal is a function of its final list and areas alone, so repeats and order change nothing).
+// Each split and restore computed its own triangles' areas.
+void FastSimulator::renew_normals_of_touched() {
+  for (int v : touched_) vertex_normals(topo_, topo_.V.nr.data(), v, v + 1);
 }
 
 StepEvents FastSimulator::adapt() {

@@ -293,8 +293,8 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   const float lt_f = float(lt);
   const std::array<float, 4> rest{float(l0 / 2), float(l0 / 2), float(dist[2]), float(dist[3])};
   relink_split(m, plan, rec, lt_f, rest);
-  // The four triangles' areas while their corners are cached (renew_normals reads them; no
-  // later event of the pass reads or changes these triangles: the stamps skip it).
+  // The four triangles' areas while their corners are cached (the normals' renewal reads them;
+  // no later split of the pass changes these triangles: the stamps skip it).
   const float unit = length_unit();
   for (int t : rec.t)
     if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);

@@ -28,7 +28,6 @@ FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int t
   if (axial()) step_.wsum.reserve_warm(room * nv);  // fit_blocks sizes it: room, as the others'
   decisions_.reserve_warm(room * 2 * nt);
   stamps_.reserve(room * nt);
-  vertex_stamps_.reserve(room * nv);
   rounds_.reserve(room * nv);
   waves_.reserve(room * nv);
   layout_scratch_.reserve(room * nv, room * 2 * nt, room * nt, par_.threads());
@@ -265,7 +264,6 @@ void FastSimulator::make_resident() {
   step_.for_each_array(whole);
   whole(decisions_);
   stamps_.claim_whole(claims);
-  vertex_stamps_.claim_whole(claims);
   rounds_.claim_whole(claims);
   waves_.claim_whole(claims);
   layout_scratch_.claim_whole(topo_, par_.threads(), claims);

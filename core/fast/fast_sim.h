@@ -150,8 +150,8 @@ class FastSimulator final : public Simulator {
   void add_grab_forces();       ///< after compute_forces: into f and the first guess
   void apply_manipulators();    ///< spheres, planes, then pins
   // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13,
-  // split_rounds.h), the restores in waves (D14, restore_waves.h), then the areas and normals
-  // renewed where triangles changed.
+  // split_rounds.h), the restores in waves (D14, restore_waves.h), each event renewing the areas
+  // and normals where its triangles changed.
   friend class SplitRounds;
   friend class RestoreWaves;
   friend struct SerialEvents;
@@ -159,8 +159,7 @@ class FastSimulator final : public Simulator {
   void collect_events();
   void list_event_ids(StepEvents& ev) const;
   void list_event_ids_by_flags(StepEvents& ev) const;
-  void renew_normals();
-  void mark_renewed_vertices();
+  void renew_normals_of_touched();  ///< the serial edits' renewal, after all events
   float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
   double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
   // One event's edits (fast_edits.cpp).
@@ -189,7 +188,7 @@ class FastSimulator final : public Simulator {
   // Per-element scratch of the topology pass, in Arrays like the topology's (a copy keeps their
   // room, growth is faulted in ahead: D16), reserved with it in the constructor.
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
-  std::vector<int> touched_;              ///< the applied events' vertices, in event order (repeats)
+  std::vector<int> touched_;              ///< the serial edits' vertices, in event order (repeats)
   /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
   /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.
   struct EventLists {
@@ -201,7 +200,6 @@ class FastSimulator final : public Simulator {
   };
   EventLists events_;
   PassStamps stamps_;                     ///< the triangles this pass's events changed
-  PassStamps vertex_stamps_;              ///< the vertices whose normals this pass renews
   SplitRounds rounds_;                    ///< the splits' unit, with its scratch
   RestoreWaves waves_;                    ///< the restores' unit, with its scratch
   StepScratch step_;                      ///< the physics step's rows, records, forces and guesses

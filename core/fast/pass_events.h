@@ -1,9 +1,8 @@
 // What the topology pass's two units (split_rounds.h, restore_waves.h) and one event's edits
 // (fast_edits.cpp) hand each other: the candidates and plans of splits and restores, the
 // stamps that mark the triangles an accepted event of this pass changed (MODEL.md §4: an event
-// is skipped when an earlier one of the pass changed one of its triangles) and, in a second
-// instance, the vertices whose normals it renews; and the pass's shared loops (the byte scan
-// of decisions and stamps, the grouping of rounds and waves).
+// is skipped when an earlier one of the pass changed one of its triangles), and the pass's
+// shared loops (the byte scan of the decisions, the grouping of rounds and waves).
 #pragma once
 
 #include <algorithm>
@@ -42,7 +41,7 @@ struct SplitPlan {
 };
 
 /// Appends the vertices of [first, last) that exist (>= 0): an applied event's vertices, for
-/// the normal renewal.
+/// the serial edits' normal renewal.
 template <class It>
 void append_live(It first, It last, std::vector<int>& out) {
   for (; first != last; ++first)
@@ -68,9 +67,8 @@ inline std::uint64_t bytes_equal(const std::uint8_t* p, std::uint8_t value) {
 }
 
 /// Calls f(k), in order, for each k in [begin, end) where bytes[k] == value (equal) or
-/// bytes[k] != value (!equal). The bytes sought are few (a pass's events among every edge, its
-/// renewed normals among every vertex): a line of bytes is tested at once, and only its matches
-/// are visited.
+/// bytes[k] != value (!equal). The bytes sought are few (a pass's events among every edge): a
+/// line of bytes is tested at once, and only its matches are visited.
 template <bool equal, class F>
 void for_each_byte(const std::uint8_t* bytes, std::uint8_t value, int begin, int end, F&& f) {
   int k = begin;
@@ -95,10 +93,9 @@ void order_by_group(int n, int groups, Group group, std::vector<int>& first, std
   first.pop_back();
 }
 
-/// The elements a pass has marked: the triangles its accepted events changed, the vertices
-/// whose normals it renews. A pass's tag, not a flag: a new pass forgets the last one's marks
+/// The elements a pass has marked: the triangles its accepted events changed. A pass's tag, not a flag: a new pass forgets the last one's marks
 /// without clearing an array the size of the mesh. One byte an element, so that the stamps read
-/// at random (a restore candidate's four triangles, an event's vertices) are a small array that
+/// at random (a restore candidate's four triangles) are a small array that
 /// stays in the caches; the tags cycle through 1-255, and the array is cleared once a cycle,
 /// before a tag comes round again.
 class PassStamps {
@@ -130,11 +127,6 @@ class PassStamps {
   /// the mesh's are harmless).
   void cover(std::size_t elements) {
     if (elements > stamp_.size()) stamp_.resize(std::max(elements, stamp_.size() + stamp_.size() / 8), 0);
-  }
-  /// Calls f(t), in order, for each element t in [begin, end) marked by this pass.
-  template <class F>
-  void for_each_marked(int begin, int end, F&& f) const {
-    for_each_byte<true>(stamp_.data(), tag_, begin, std::min(end, int(stamp_.size())), f);
   }
   /// For prefetching t's stamp ahead of a mark or a test (nullptr past the array).
   const std::uint8_t* line_of(int t) const { return t >= 0 && t < int(stamp_.size()) ? &stamp_[t] : nullptr; }

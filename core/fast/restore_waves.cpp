@@ -33,6 +33,7 @@ int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, co
         if (q + kNear < end) prefetch_restore(m, m.records[candidates_[candidate_at(q + kNear)].record]);
         const int p = by_wave_[q], k = restorable_[p];
         freed_[p] = {k, sim.restore_edge_local(restores[k])};
+        renew_normals(sim, candidates_[k].verts);
       }
     });
     large_waves_ += size > kWaveGrain;
@@ -48,11 +49,15 @@ void RestoreWaves::applied_edges(const std::vector<int>& restores, std::vector<i
   for (const auto& f : freed_) out.push_back(restores[std::size_t(f.first)]);
 }
 
-void RestoreWaves::touched(std::vector<int>& out) const {
-  for (const auto& f : freed_) {
-    const auto& verts = candidates_[std::size_t(f.first)].verts;
-    append_live(verts.begin() + 1, verts.end(), out);  // verts[0] is n, released
-  }
+// The normals of a restore's live vertices i, j, l, r (n is released), renewed while their
+// lists and the restore's areas are in cache. No event reads a normal after the splits, and a
+// later restore at a vertex renews it again: the last leaves the normal of the final areas. The
+// renewal reads the vertex's list and the areas of its triangles, which only the events at the
+// vertex write: the restores of a wave, vertex-disjoint, neither race nor depend on their order.
+void RestoreWaves::renew_normals(FastSimulator& sim, const std::array<int, 5>& verts) {
+  Topology& m = sim.topo_;
+  for (int q = 1; q < 5; ++q)
+    if (verts[q] >= 0) vertex_normals(m, m.V.nr.data(), verts[q], verts[q] + 1);
 }
 
 std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {

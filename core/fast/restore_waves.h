@@ -33,12 +33,11 @@ class RestoreWaves {
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
   void claim_whole(ColdClaims& claims) { claims.whole(wave_last_); }
   /// Applies the restore events (edge slots, in event order) to sim's mesh, after the pass's
-  /// splits, whose changed triangles `stamps` holds. Returns the restores applied. Their ids stay taken until free_ids().
+  /// splits, whose changed triangles `stamps` holds, and renews the normals of the vertices
+  /// whose triangles changed. Returns the restores applied. Their ids stay taken until free_ids().
   int apply(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps);
   /// Puts what the last apply() freed on m's free lists, in event order (Topology::free_ids).
   void free_ids(Topology& m) const;
-  /// Appends the live vertices (i, j, l, r) of each restore the last apply() applied.
-  void touched(std::vector<int>& out) const;
   /// Appends the edge slot of each restore the last apply() applied (`restores` is what it
   /// was given), in event order.
   void applied_edges(const std::vector<int>& restores, std::vector<int>& out) const;
@@ -64,6 +63,7 @@ class RestoreWaves {
   /// Each restorable candidate's wave, serially in event order (the class comment); fills
   /// restorable_ and by_wave_. Returns the number of waves.
   int assign_waves();
+  static void renew_normals(FastSimulator& sim, const std::array<int, 5>& verts);
 
   Array<int> wave_last_;  ///< per vertex slot: 1 + the last wave assigned at it (0 between passes)
   // Per pass, kept so that a pass allocates (and faults in) no memory.

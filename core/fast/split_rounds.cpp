@@ -126,21 +126,13 @@ void SplitRounds::make_room(FastSimulator& sim) {
     const int v = involved_[k];
     Tally& t = tally_[v];
     m.make_room(v, m.V.spring_list[v].count + t.spring_adds, m.V.tri_list[v].count + t.tri_adds);
-    t = Tally{};
+    t.spring_adds = t.tri_adds = 0;  // the rounds read the rest (renew_normals)
   }
 }
 
 void SplitRounds::applied_edges(std::vector<int>& out) const {
   for (std::size_t k = 0; k < plans_.size(); ++k)
     if (applied_[k]) out.push_back(plans_[k].e);
-}
-
-void SplitRounds::touched(std::vector<int>& out) const {
-  for (std::size_t k = 0; k < plans_.size(); ++k) {
-    if (!applied_[k]) continue;
-    append_live(plans_[k].ends.begin(), plans_[k].ends.end(), out);
-    out.push_back(plans_[k].n);
-  }
 }
 
 std::vector<SplitRounds::Applied> SplitRounds::applied() const {
@@ -170,10 +162,28 @@ int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
         }
         const int i = by_round_[k];
         applied_[i] = sim.apply_split(plans_[i]);
+        renew_normals(sim, plans_[i], r);
       }
     });
   }
   return int(std::count(applied_.begin(), applied_.end(), std::uint8_t(1)));
+}
+
+// The normals of a split's vertices, renewed while their lists and the split's areas are in
+// cache. A later split of the pass reads the normals of its edge's ends as the decisions saw them
+// (apply_split, [Eq 7]), so a vertex is renewed at its last split of the pass only (after that
+// split's own read), once; a later restore at it renews it again. n is no split's end (the
+// pass's split edges existed before it), and no later split changes its triangles. The renewal
+// reads the vertex's list and the areas of its triangles, which only the events at the vertex
+// write: the splits of a round, vertex-disjoint, neither race nor depend on their order.
+void SplitRounds::renew_normals(FastSimulator& sim, const SplitPlan& plan, int round) {
+  Topology& m = sim.topo_;
+  for (int v : plan.ends) {
+    if (v < 0 || tally_[v].round_last != round) continue;
+    vertex_normals(m, m.V.nr.data(), v, v + 1);
+    tally_[v] = Tally{};  // the vertex's last split of the pass
+  }
+  vertex_normals(m, m.V.nr.data(), plan.n, plan.n + 1);
 }
 
 }  // namespace crumple::fast

@@ -27,10 +27,9 @@ class SplitRounds {
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
   void claim_whole(ColdClaims& claims) { claims.whole(tally_); }
   /// Applies the split events (edge slots, in event order) to sim's mesh, marking the triangles
-  /// each accepted split changes in `stamps`. Returns the splits applied.
+  /// each accepted split changes in `stamps`, and renews the normals of the vertices whose
+  /// triangles changed (renew_normals). Returns the splits applied.
   int apply(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps);
-  /// Appends the live vertices (i, j, l, r, n) of each split the last apply() applied.
-  void touched(std::vector<int>& out) const;
   /// Appends the edge slot of each split the last apply() applied, in event order.
   void applied_edges(std::vector<int>& out) const;
   /// Rounds so far large enough to run as a parallel loop (tests check they happened).
@@ -49,6 +48,7 @@ class SplitRounds {
   void take_ids(FastSimulator& sim, PassStamps& stamps);
   void make_room(FastSimulator& sim);
   int run_rounds(FastSimulator& sim, int rounds);
+  void renew_normals(FastSimulator& sim, const SplitPlan& plan, int round);
 
   /// What this pass's accepted splits do at one vertex: one record, so that the serial plan
   /// misses one line a vertex, not one per array.
@@ -58,8 +58,9 @@ class SplitRounds {
     int tri_adds = 0;     ///< triangles the splits of this pass add at the vertex
     int unused = 0;       ///< pads the record to 16 bytes: four a line, none across two
   };
-  // Per vertex slot, all zero between passes (reset for the vertices used): no pass clears or
-  // allocates an array the size of the mesh.
+  // Per vertex slot, all zero between passes (reset for the vertices used: the adds by
+  // make_room, the rest at the vertex's last split, renew_normals): no pass clears or allocates
+  // an array the size of the mesh.
   Array<Tally> tally_;
   // Per pass, kept so that a pass allocates (and faults in) no memory.
   std::vector<SplitCandidate> candidates_;   ///< per split event

@@ -367,7 +367,7 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
-// The byte scan of the decisions' listing and the normal renewal, against a plain loop, over
+// The byte scan of the decisions' listing, against a plain loop, over
 // ranges that start and end inside a line and across lines, for both senses. Catches halves of
 // a line's mask swapped, a match past bit 31 lost, a tail left unvisited, a range's start
 // rounded to its line.
@@ -423,7 +423,7 @@ TEST(PassStamps, AMarkHoldsForItsPassAloneThroughTheTagsCycles) {
 
 // invoke runs each of its two jobs exactly once, in the backend's arena, and returns only when
 // both are done, a parallel loop inside a job covering its range once (the topology pass's
-// serial tails beside its renewal loop, SplitRounds' room beside its ids). Catches a job
+// freed ids beside its events' ids, SplitRounds' room beside its ids' parallel loop). Catches a job
 // skipped or run twice, jobs run outside the arena (on whatever threads TBB would pick), a
 // return before a job has finished, and a nested loop that loses chunks inside the arena.
 TEST(Parallel, InvokeRunsBothJobsOnceAndReturnsWhenBothAreDone) {
@@ -1213,6 +1213,50 @@ TEST(FastTopology, ParallelRoundsAndWavesEqualSerialEdits) {
     EXPECT_GT(large_waves, 0u);
     EXPECT_TRUE(same_snapshot(rounds, serial)) << threads << " threads";
   }
+}
+
+// The rounds and waves renew each event's normals as it applies (a vertex at its last split of
+// the pass, after that split read it, and at each restore), the serial edits after all events:
+// after every pass with events the stored normals are those of a full recomputation on the new
+// topology, bit for bit, on one thread and two. Catches a vertex of an event left out (a wing's,
+// the new vertex's, a restore's), a renewal before the vertex's last split, and a tally whose
+// rounds make_room reset (no split then counts as a vertex's last). Splits whose end had an
+// earlier split of the pass must occur, or renewing at every split would pass unseen here (it
+// fails ParallelRoundsAndWavesEqualSerialEdits, which compares what the splits read).
+TEST(FastTopology, EventsLeaveTheNormalsOfTheNewTopology) {
+  for (const bool serial : {false, true})
+    for (int threads : {1, 2}) {
+      fast::FastSimulator sim(make_grid(48), Params{}, threads);
+      sim.set_serial_edits(serial);
+      long passes = 0, splits = 0, restores = 0, ends_split_before = 0;
+      for (int f = 0; f < 110 && !HasFailure(); ++f) {
+        const StepEvents ev = sim.step();
+        if (ev.splits + ev.restores == 0) continue;  // no event: the adapt pass may not have run
+        ++passes, splits += ev.splits, restores += ev.restores;
+        const std::vector<fast::SplitRounds::Applied> rounds = sim.split_rounds_applied();  // none if serial
+        std::map<int, int> first_round;  // vertex -> round of its first split this pass
+        for (const fast::SplitRounds::Applied& a : rounds)
+          for (int q = 0; q < 4; ++q)
+            if (a.verts[q] >= 0) first_round.try_emplace(a.verts[q], a.round);
+        for (const fast::SplitRounds::Applied& a : rounds)
+          ends_split_before += first_round[a.verts[0]] < a.round || first_round[a.verts[1]] < a.round;
+        const std::vector<Vec3d> fresh = sim.normals();  // recomputed from scratch on a copy
+        const std::vector<bool> alive = sim.snapshot().vertex_alive;
+        const fast::Topology& m = sim.topology();
+        for (int id = 0; id < int(fresh.size()); ++id) {
+          if (!alive[std::size_t(id)]) continue;
+          const fast::Float4 n = m.V.nr[m.V.phys[id]];
+          ASSERT_EQ(Vec3d({n.x, n.y, n.z}), fresh[std::size_t(id)])
+              << "vertex " << id << ", frame " << f << ", " << threads << " threads" << (serial ? ", serial" : "");
+        }
+      }
+      EXPECT_GT(passes, 50);
+      EXPECT_GT(splits, 2000);
+      EXPECT_GT(restores, 500);
+      if (!serial) {
+        EXPECT_GT(ends_split_before, 100) << threads << " threads";
+      }
+    }
 }
 
 // Events of one pass applied in groups that run in parallel (split rounds, restore waves): no
