@@ -58,22 +58,30 @@ void FastSimulator::adapt_decide() {
   const int n = topo_.E.size();
   decisions_.resize(std::size_t(n));
   events_.found.resize(2 * std::size_t(Parallel::blocks_of(n, kTestBlock)));
+  events_.found_records.resize(events_.found.size() / 2);
   par_.run_blocks(n, kTestBlock, [&](int b, int begin, int end) {
     adapt_test(topo_, c, decisions_.data(), begin, end);
     list_events(b, begin, end);
   });
 }
 
-// Block b's events, listed while its decisions and its edges' ids are still in cache from the
-// test (the pass would otherwise read them again, each at random, to order the events).
+// Block b's events, listed while its decisions and its edges' ids and records are still in
+// cache from the test (the pass would otherwise read them again, each at random, to order the
+// events; and the restores' pre-test, to find each candidate's split record).
 void FastSimulator::list_events(int b, int begin, int end) {
   std::vector<std::uint64_t>& splits = events_.found[2 * std::size_t(b)];
   std::vector<std::uint64_t>& restores = events_.found[2 * std::size_t(b) + 1];
-  splits.clear(), restores.clear();
+  std::vector<std::int32_t>& records = events_.found_records[std::size_t(b)];
+  splits.clear(), restores.clear(), records.clear();
   const std::int32_t* lid = topo_.E.lid.data();
   for_each_byte<false>(decisions_.data(), 0, begin, end, [&](int e) {
     const std::uint64_t key = std::uint64_t(std::uint32_t(lid[e])) << 32 | std::uint32_t(e);
-    (decisions_[e] == 1 ? splits : restores).push_back(key);
+    if (decisions_[e] == 1) {
+      splits.push_back(key);
+    } else {
+      restores.push_back(key);
+      records.push_back(topo_.E[e].record);
+    }
   });
 }
 
@@ -95,7 +103,7 @@ StepEvents FastSimulator::adapt_apply() {
     // disjoint sets of data, so it runs side by side: the freed ids onto the free lists, and
     // the events' ids for the caller.
     ev.splits = rounds_.apply(*this, splits, stamps_);
-    ev.restores = waves_.apply(*this, events_.restores, stamps_);
+    ev.restores = waves_.apply(*this, events_.restores, events_.restore_records, stamps_);
     par_.invoke([&] { waves_.free_ids(topo_); }, [&] { list_event_ids(ev); });
   }
   normals_valid_ = true;
@@ -131,14 +139,27 @@ void FastSimulator::collect_events() {
   // restores free only mesh edges, never a pending (auxiliary) one.
   EventLists& s = events_;
   const int id_bits = std::bit_width(unsigned(topo_.E.phys.size()));
-  for (int kind : {0, 1}) {
-    s.keys.clear();
-    for (std::size_t b = std::size_t(kind); b < s.found.size(); b += 2)
-      s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
-    sort_by_id(par_, s.keys, s.spare, s.count, id_bits);
-    std::vector<int>& slots = kind == 0 ? s.splits : s.restores;
-    slots.resize(s.keys.size());
-    for (std::size_t k = 0; k < s.keys.size(); ++k) slots[k] = int(std::uint32_t(s.keys[k]));
+  s.keys.clear();
+  for (std::size_t b = 0; b < s.found.size(); b += 2) s.keys.insert(s.keys.end(), s.found[b].begin(), s.found[b].end());
+  sort_by_id(par_, s.keys, s.spare, s.count, id_bits);
+  s.splits.resize(s.keys.size());
+  for (std::size_t k = 0; k < s.keys.size(); ++k) s.splits[k] = int(std::uint32_t(s.keys[k]));
+  // A restore's key carries its place in `carried` below its id instead of its slot, so that
+  // its split record follows it through the sort to the waves' pre-test.
+  s.keys.clear(), s.carried.clear();
+  for (std::size_t b = 1; b < s.found.size(); b += 2) {
+    const std::vector<std::uint64_t>& keys = s.found[b];
+    const std::vector<std::int32_t>& records = s.found_records[b / 2];
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      s.keys.push_back((keys[k] & ~std::uint64_t(0xffffffffu)) | s.carried.size());
+      s.carried.push_back({int(std::uint32_t(keys[k])), records[k]});
+    }
+  }
+  sort_by_id(par_, s.keys, s.spare, s.count, id_bits);
+  s.restores.resize(s.keys.size()), s.restore_records.resize(s.keys.size());
+  for (std::size_t k = 0; k < s.keys.size(); ++k) {
+    const std::array<int, 2>& c = s.carried[std::uint32_t(s.keys[k])];
+    s.restores[k] = c[0], s.restore_records[k] = c[1];
   }
 }
 

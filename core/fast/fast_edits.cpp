@@ -304,7 +304,11 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
 bool FastSimulator::can_restore(int e) const {
   const Topology& m = topo_;
   if (e < 0 || e >= m.E.size() || m.E[e].flags != kAlive || m.E[e].record < 0) return false;
-  const SplitRecord& s = m.records[m.E[e].record];
+  return can_restore_record(m.records[m.E[e].record]);
+}
+
+bool FastSimulator::can_restore_record(const SplitRecord& s) const {
+  const Topology& m = topo_;
   const int i = s.k[0], j = s.k[1], l = s.k[2], r = s.k[3], n = s.n;
   // n still has exactly its own edges. Tested first: most candidates that fail, fail here (a
   // later split at n, not yet restored), and this needs only n's list head, not the edges.

@@ -172,6 +172,9 @@ class FastSimulator final : public Simulator {
   bool apply_split(const SplitPlan& p);
   bool split_edge(int e);                     ///< plan and apply: one split alone
   bool can_restore(int e) const;
+  /// can_restore for an alive auxiliary edge, from its split record alone (the restore
+  /// waves' pre-test, whose candidates are such edges through the pass).
+  bool can_restore_record(const SplitRecord& s) const;
   void restore_edge(int e);                 ///< one restore alone, free lists included
   /// All of a restore but the free lists (safe in parallel for restores of disjoint
   /// vertices): returns what it freed, for Topology::free_ids.
@@ -193,10 +196,13 @@ class FastSimulator final : public Simulator {
   /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.
   struct EventLists {
     std::vector<std::vector<std::uint64_t>> found;  ///< keys per block of adapt_test and kind, in slot order
+    std::vector<std::vector<std::int32_t>> found_records;  ///< per block, each restore key's split record
     std::vector<std::uint64_t> keys;                ///< one kind's keys, sorted
     std::vector<std::uint64_t> spare;               ///< the keys' other buffer while they are sorted
     std::vector<int> count;                         ///< the sort's digit counts
     std::vector<int> splits, restores;              ///< event slots in event order
+    std::vector<int> restore_records;               ///< each restore's split record, in event order
+    std::vector<std::array<int, 2>> carried;        ///< a restore key's slot and record while the keys sort
   };
   EventLists events_;
   PassStamps stamps_;                     ///< the triangles this pass's events changed

@@ -14,8 +14,9 @@ constexpr int kRestoreTestGrain = 128;  ///< a restore test reads a record and i
 
 void RestoreWaves::reserve(std::size_t vertices) { wave_last_.reserve_warm(vertices); }
 
-int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps) {
-  pretest(sim, restores, stamps);
+int RestoreWaves::apply(FastSimulator& sim, const std::vector<int>& restores, const std::vector<int>& records,
+                        const PassStamps& stamps) {
+  pretest(sim, records, stamps);
   wave_last_.resize(std::size_t(sim.topo_.V.size()), 0);  // all 0 between passes
   const int waves = assign_waves();
   const Topology& m = sim.topo_;
@@ -68,17 +69,18 @@ std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {
 
 // Every candidate's answer on the state after the splits, in parallel: restorable unless an
 // accepted split of the pass changed a triangle of its record (the splits' stamps) or
-// can_restore says no. No restore of the pass changes it (the class comment).
-void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& restores, const PassStamps& stamps) {
+// can_restore says no. No restore of the pass changes it (the class comment). A candidate is an
+// alive auxiliary edge with a split record through the pass (splits change only mesh edges and
+// free none), so its record, carried from the decisions, is all the test reads: not the edge.
+void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& records, const PassStamps& stamps) {
   const Topology& m = sim.topo_;
-  const int nr = int(restores.size());
+  const int nr = int(records.size());
   candidates_.resize(std::size_t(nr));
   sim.par_.run(nr, kRestoreTestGrain, [&](int b, int e) {
     for (int k = b; k < e; ++k) {
-      if (k + kNear < e) prefetch(&m.records[m.E[restores[k + kNear]].record]);
-      const int record = m.E[restores[k]].record;
-      const SplitRecord& r = m.records[record];
-      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !stamps.any_touched(r.t) && sim.can_restore(restores[k]), -1, record};
+      if (k + kNear < e) prefetch(&m.records[records[k + kNear]]);
+      const SplitRecord& r = m.records[records[k]];
+      candidates_[k] = Candidate{{r.n, r.k[0], r.k[1], r.k[2], r.k[3]}, !stamps.any_touched(r.t) && sim.can_restore_record(r), -1, records[k]};
     }
   });
 }
