@@ -23,7 +23,7 @@ constexpr double kReferenceStep = 1.0 / 60.0;  ///< h_ref of P_step (MODEL.md §
 /// vector lanes of Parallel::run_lanes, so every edge takes the same code path on any thread count.
 constexpr int kTestBlock = 4096;
 static_assert(kTestBlock % Parallel::kLanes == 0);
-/// Sorts keys (id << 32 | slot, ids unique and below 2^id_bits) by id, in least-significant-
+/// Sorts keys (id << 32 | a payload, ids unique and below 2^id_bits) by id, in least-significant-
 /// digit radix passes (radix.h) between keys and spare: a few streaming passes where a
 /// comparison sort of the step's thousands of keys costs a dozen compares a key.
 void sort_by_id(const Parallel& par, std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& spare,
@@ -71,7 +71,7 @@ void FastSimulator::adapt_decide() {
 void FastSimulator::list_events(int b, int begin, int end) {
   std::vector<std::uint64_t>& splits = events_.found[2 * std::size_t(b)];
   std::vector<std::uint64_t>& restores = events_.found[2 * std::size_t(b) + 1];
-  std::vector<std::int32_t>& records = events_.found_records[std::size_t(b)];
+  std::vector<int>& records = events_.found_records[std::size_t(b)];
   splits.clear(), restores.clear(), records.clear();
   const std::int32_t* lid = topo_.E.lid.data();
   for_each_byte<false>(decisions_.data(), 0, begin, end, [&](int e) {
@@ -149,7 +149,7 @@ void FastSimulator::collect_events() {
   s.keys.clear(), s.carried.clear();
   for (std::size_t b = 1; b < s.found.size(); b += 2) {
     const std::vector<std::uint64_t>& keys = s.found[b];
-    const std::vector<std::int32_t>& records = s.found_records[b / 2];
+    const std::vector<int>& records = s.found_records[b / 2];
     for (std::size_t k = 0; k < keys.size(); ++k) {
       s.keys.push_back((keys[k] & ~std::uint64_t(0xffffffffu)) | s.carried.size());
       s.carried.push_back({int(std::uint32_t(keys[k])), records[k]});

@@ -172,8 +172,9 @@ class FastSimulator final : public Simulator {
   bool apply_split(const SplitPlan& p);
   bool split_edge(int e);                     ///< plan and apply: one split alone
   bool can_restore(int e) const;
-  /// can_restore for an alive auxiliary edge, from its split record alone (the restore
-  /// waves' pre-test, whose candidates are such edges through the pass).
+  /// can_restore from the split record alone, for the record of an edge that adapt_test
+  /// marked for a restore (an alive auxiliary edge with a record) in this pass: the restore
+  /// waves' pre-test, whose candidates stay such edges through the pass (RestoreWaves::pretest).
   bool can_restore_record(const SplitRecord& s) const;
   void restore_edge(int e);                 ///< one restore alone, free lists included
   /// All of a restore but the free lists (safe in parallel for restores of disjoint
@@ -193,10 +194,11 @@ class FastSimulator final : public Simulator {
   Array<std::uint8_t> decisions_;         ///< adapt_test output per edge
   std::vector<int> touched_;              ///< the serial edits' vertices, in event order (repeats)
   /// The events of a pass, kept from pass to pass so that a pass allocates (and faults in) no
-  /// memory. An event's key is its edge's logical id above its slot: keys sort in event order.
+  /// memory. An event's key is its edge's logical id above its slot (a restore's, while the keys
+  /// sort, above its place in `carried`): keys sort in event order.
   struct EventLists {
     std::vector<std::vector<std::uint64_t>> found;  ///< keys per block of adapt_test and kind, in slot order
-    std::vector<std::vector<std::int32_t>> found_records;  ///< per block, each restore key's split record
+    std::vector<std::vector<int>> found_records;    ///< per block b, the split record of each key of found[2b + 1]
     std::vector<std::uint64_t> keys;                ///< one kind's keys, sorted
     std::vector<std::uint64_t> spare;               ///< the keys' other buffer while they are sorted
     std::vector<int> count;                         ///< the sort's digit counts

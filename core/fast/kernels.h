@@ -107,8 +107,9 @@ struct AdaptConstants {
   bool fracture = true, restoration = true;
 };
 
-/// Per edge: 1 if it breaks this step [Eq 6], 2 if it is an auxiliary edge whose crease is
-/// bent enough to restore [Eq 10] (topology conditions are checked when applied), else 0.
+/// Per edge: 1 if it breaks this step [Eq 6], 2 if it is an alive auxiliary edge with a split
+/// record whose crease is bent enough to restore [Eq 10] (the other topology conditions are
+/// checked when applied), else 0.
 void adapt_test(const Topology& m, const AdaptConstants& c, std::uint8_t* out, int begin, int end);
 
 }  // namespace crumple::fast

@@ -69,9 +69,10 @@ std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {
 
 // Every candidate's answer on the state after the splits, in parallel: restorable unless an
 // accepted split of the pass changed a triangle of its record (the splits' stamps) or
-// can_restore says no. No restore of the pass changes it (the class comment). A candidate is an
-// alive auxiliary edge with a split record through the pass (splits change only mesh edges and
-// free none), so its record, carried from the decisions, is all the test reads: not the edge.
+// can_restore says no. No restore of the pass changes it (the class comment). A candidate stays
+// an alive auxiliary edge with the same split record through the splits (a split changes the
+// flags and record of its own mesh edge alone, takes only free slots and records, and frees
+// nothing), so its record, carried from the decisions, is all the test reads: not the edge.
 void RestoreWaves::pretest(FastSimulator& sim, const std::vector<int>& records, const PassStamps& stamps) {
   const Topology& m = sim.topo_;
   const int nr = int(records.size());

@@ -32,10 +32,12 @@ class RestoreWaves {
   void reserve(std::size_t vertices);
   /// Claims the whole room for the caller to touch (FastSimulator::make_resident).
   void claim_whole(ColdClaims& claims) { claims.whole(wave_last_); }
-  /// Applies the restore events (edge slots, in event order, with their split records) to sim's mesh, after the pass's
-  /// splits, whose changed triangles `stamps` holds, and renews the normals of the vertices
-  /// whose triangles changed. Returns the restores applied. Their ids stay taken until free_ids().
-  int apply(FastSimulator& sim, const std::vector<int>& restores, const std::vector<int>& records, const PassStamps& stamps);
+  /// Applies the restore events (edge slots in event order, with their split records) to sim's
+  /// mesh, after the pass's splits, whose changed triangles `stamps` holds, and renews the
+  /// normals of the vertices whose triangles changed. Returns the restores applied. Their ids
+  /// stay taken until free_ids().
+  int apply(FastSimulator& sim, const std::vector<int>& restores, const std::vector<int>& records,
+            const PassStamps& stamps);
   /// Puts what the last apply() freed on m's free lists, in event order (Topology::free_ids).
   void free_ids(Topology& m) const;
   /// Appends the edge slot of each restore the last apply() applied (`restores` is what it
