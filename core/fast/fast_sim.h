@@ -150,8 +150,8 @@ class FastSimulator final : public Simulator {
   void add_grab_forces();       ///< after compute_forces: into f and the first guess
   void apply_manipulators();    ///< spheres, planes, then pins
   // The topology pass (fast_adapt.cpp): the events in order, the splits in rounds (D13,
-  // split_rounds.h), the restores in waves (D14, restore_waves.h), each event renewing the areas
-  // and normals where its triangles changed.
+  // split_rounds.h), the restores in waves (D14, restore_waves.h); each event computes its
+  // triangles' areas, and the rounds and waves renew the normals event by event.
   friend class SplitRounds;
   friend class RestoreWaves;
   friend struct SerialEvents;

@@ -93,11 +93,11 @@ void order_by_group(int n, int groups, Group group, std::vector<int>& first, std
   first.pop_back();
 }
 
-/// The elements a pass has marked: the triangles its accepted events changed. A pass's tag, not a flag: a new pass forgets the last one's marks
-/// without clearing an array the size of the mesh. One byte an element, so that the stamps read
-/// at random (a restore candidate's four triangles) are a small array that
-/// stays in the caches; the tags cycle through 1-255, and the array is cleared once a cycle,
-/// before a tag comes round again.
+/// The elements a pass has marked: the triangles its accepted events changed. A pass's tag, not
+/// a flag: a new pass forgets the last one's marks without clearing an array the size of the
+/// mesh. One byte an element, so that the stamps read at random (a restore candidate's four
+/// triangles) are a small array that stays in the caches; the tags cycle through 1-255, and the
+/// array is cleared once a cycle, before a tag comes round again.
 class PassStamps {
  public:
   void reserve(std::size_t elements) { stamp_.reserve_warm(elements); }

@@ -367,10 +367,9 @@ TEST(Parallel, FixedBlocksAreTheirOwnRangeOnceOnAnyThreadCount) {
   }
 }
 
-// The byte scan of the decisions' listing, against a plain loop, over
-// ranges that start and end inside a line and across lines, for both senses. Catches halves of
-// a line's mask swapped, a match past bit 31 lost, a tail left unvisited, a range's start
-// rounded to its line.
+// The byte scan of the decisions' listing, against a plain loop, over ranges that start and end
+// inside a line and across lines, for both senses. Catches halves of a line's mask swapped, a
+// match past bit 31 lost, a tail left unvisited, a range's start rounded to its line.
 TEST(ForEachByte, VisitsTheMatchesOfAnyRangeInOrder) {
   std::vector<std::uint8_t> bytes(300, 0);
   for (std::size_t k = 0; k < bytes.size(); ++k)
@@ -423,8 +422,8 @@ TEST(PassStamps, AMarkHoldsForItsPassAloneThroughTheTagsCycles) {
 
 // invoke runs each of its two jobs exactly once, in the backend's arena, and returns only when
 // both are done, a parallel loop inside a job covering its range once (the topology pass's
-// freed ids beside its events' ids, SplitRounds' room beside its ids' parallel loop). Catches a job
-// skipped or run twice, jobs run outside the arena (on whatever threads TBB would pick), a
+// freed ids beside its events' ids, SplitRounds' room beside its ids' parallel loop). Catches a
+// job skipped or run twice, jobs run outside the arena (on whatever threads TBB would pick), a
 // return before a job has finished, and a nested loop that loses chunks inside the arena.
 TEST(Parallel, InvokeRunsBothJobsOnceAndReturnsWhenBothAreDone) {
   for (int threads : {1, 2, 4}) {
