@@ -251,10 +251,11 @@ bool FastSimulator::split_edge(int e) {
   const SplitPlan p = plan_split(split_candidate(e));
   if (p.e < 0) return false;
   topo_.fit();
-  return apply_split(p);
+  apply_split(p);
+  return true;
 }
 
-bool FastSimulator::apply_split(const SplitPlan& plan) {
+void FastSimulator::apply_split(const SplitPlan& plan) {
   Topology& m = topo_;
   Vertices& V = m.V;
   const int e = plan.e;
@@ -298,7 +299,6 @@ bool FastSimulator::apply_split(const SplitPlan& plan) {
   const float unit = length_unit();
   for (int t : rec.t)
     if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);
-  return true;
 }
 
 bool FastSimulator::can_restore(int e) const {

@@ -169,7 +169,7 @@ class FastSimulator final : public Simulator {
   /// its vertex and record are the batch's split-th takes of their kinds, its edges and triangles
   /// the takes from edge_at and tri_at on (Topology::peek_X). Takes nothing: safe in parallel.
   SplitPlan plan_split_at(const SplitCandidate& c, int split, int edge_at, int tri_at) const;
-  bool apply_split(const SplitPlan& p);
+  void apply_split(const SplitPlan& p);  ///< a plan of a candidate that passed (p.e >= 0)
   bool split_edge(int e);                     ///< plan and apply: one split alone
   bool can_restore(int e) const;
   /// can_restore from the split record alone, for the record of an edge that adapt_test

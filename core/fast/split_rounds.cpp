@@ -131,14 +131,12 @@ void SplitRounds::make_room(FastSimulator& sim) {
 }
 
 void SplitRounds::applied_edges(std::vector<int>& out) const {
-  for (std::size_t k = 0; k < plans_.size(); ++k)
-    if (applied_[k]) out.push_back(plans_[k].e);
+  for (const SplitPlan& p : plans_) out.push_back(p.e);
 }
 
 std::vector<SplitRounds::Applied> SplitRounds::applied() const {
   std::vector<Applied> out;
   for (std::size_t k = 0; k < plans_.size(); ++k) {
-    if (!applied_[k]) continue;
     const SplitPlan& p = plans_[k];
     out.push_back({accepted_[k].candidate, round_of_[k], {p.ends[0], p.ends[1], p.ends[2], p.ends[3], p.n}});
   }
@@ -149,7 +147,6 @@ std::vector<SplitRounds::Applied> SplitRounds::applied() const {
 int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
   const Topology& m = sim.topo_;
   order_by_group(int(plans_.size()), rounds + 1, [&](int k) { return round_of_[k]; }, start_, by_round_);  // rounds from 1
-  applied_.assign(plans_.size(), 0);
   for (int r = 1; r <= rounds; ++r) {
     large_rounds_ += start_[r + 1] - start_[r] > kRoundGrain;
     sim.par_.run(start_[r + 1] - start_[r], kRoundGrain, [&](int b, int e) {
@@ -161,12 +158,12 @@ int SplitRounds::run_rounds(FastSimulator& sim, int rounds) {
           prefetch_split(m, plans_[ahead].ends, candidates_[accepted_[ahead].candidate].tris);
         }
         const int i = by_round_[k];
-        applied_[i] = sim.apply_split(plans_[i]);
+        sim.apply_split(plans_[i]);
         renew_normals(sim, plans_[i], r);
       }
     });
   }
-  return int(std::count(applied_.begin(), applied_.end(), std::uint8_t(1)));
+  return int(plans_.size());  // every accepted split applies
 }
 
 // The normals of a split's vertices, renewed while their lists and the split's areas are in

@@ -75,7 +75,6 @@ class SplitRounds {
   std::vector<int> round_of_;                ///< per plan
   std::vector<int> involved_;                ///< vertices of accepted splits (i, j, l, r), once each
   std::vector<int> by_round_, start_;        ///< plans sorted by round, each round's first
-  std::vector<std::uint8_t> applied_;        ///< per plan
   std::uint64_t large_rounds_ = 0;
 };
 
