@@ -38,10 +38,12 @@ struct Sheet::Impl {
   int block_left = 0;          ///< auto_substeps: steps left before the count is chosen again
   int frames = 0;              ///< step() calls
   std::uint64_t generation = 0;
-  std::string broken;          ///< why the state is unusable (empty: it is fine)
+  bool usable = true;          ///< false once unstable or after a step() that failed part way
+  std::string broken;          ///< why it is not usable (best effort: building it may fail)
 
   void begin_block();
   void take_step(FrameEvents& out);
+  void advance(double frame_dt, FrameEvents& out);  ///< the steps of a frame and its render buffers
   std::string check_state();
   void step(double frame_dt, FrameEvents& out);
 };
@@ -147,12 +149,35 @@ std::string Sheet::Impl::check_state() {
 // rounding of frame_dt / substeps, so a frame_dt equal to params.frame_dt takes exactly
 // `substeps` steps every call.
 void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
-  if (!broken.empty()) throw UnstableError(broken, out);
+  if (!usable) throw UnstableError(broken.empty() ? "a step failed part way" : broken, out);
   if (!std::isfinite(frame_dt) || frame_dt < 0 || frame_dt > 1)
     throw Error("frame_dt must be a finite number in [0, 1] seconds");
   if (std::string m = api::check_manipulators(manip, int(buffers.positions.size() / 3)); !m.empty())
     throw Error(m);
   const auto t0 = std::chrono::steady_clock::now();
+  // From here on a failure (std::bad_alloc, an exception from the event callback) comes after
+  // state has changed: time steps and mesh events cannot be undone, and a pass stopped part way
+  // leaves the backend's mesh half edited, so the sheet refuses every later step.
+  // (The instability check is part of it: a frame whose check failed was never checked.)
+  const int frame = frames + 1;
+  std::string why;
+  try {
+    advance(frame_dt, out);
+    why = check_state();
+  } catch (const std::exception& e) {
+    usable = false;  // first: the message below allocates, which may fail as the step did
+    broken = "a step failed part way at frame " + std::to_string(frame) + ": " + e.what();
+    throw;
+  }
+  out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!why.empty()) {
+    usable = false;
+    broken = "simulation became unstable at frame " + std::to_string(frames) + ": " + why;
+    throw UnstableError(broken, out);
+  }
+}
+
+void Sheet::Impl::advance(double frame_dt, FrameEvents& out) {
   sim->set_manipulators(manip);
   carry += frame_dt;
   while (carry > h * (1 - 1e-6)) {
@@ -163,12 +188,6 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   out.topology_changed = out.splits + out.restores > 0;
   if (out.topology_changed) ++generation;
   sim->render(buffers, out.topology_changed);
-  const std::string why = check_state();
-  out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  if (!why.empty()) {
-    broken = "simulation became unstable at frame " + std::to_string(frames) + ": " + why;
-    throw UnstableError(broken, out);
-  }
 }
 
 FrameEvents Sheet::step(double frame_dt) {

@@ -40,14 +40,6 @@ struct SplitPlan {
   int record = -1;                           ///< the split record
 };
 
-/// Appends the vertices of [first, last) that exist (>= 0): an applied event's vertices, for
-/// the serial edits' normal renewal.
-template <class It>
-void append_live(It first, It last, std::vector<int>& out) {
-  for (; first != last; ++first)
-    if (*first >= 0) out.push_back(*first);
-}
-
 constexpr int kByteLine = 64;  ///< bytes a scan tests at once: one cache line
 
 /// Bit k set where p[k] == value, for the kByteLine bytes at p.

@@ -4,6 +4,16 @@
 
 namespace crumple::fast {
 
+namespace {
+/// Appends the vertices of [first, last) that exist (>= 0): an applied event's vertices, for
+/// the serial edits' normal renewal.
+template <class It>
+void append_live(It first, It last, std::vector<int>& out) {
+  for (; first != last; ++first)
+    if (*first >= 0) out.push_back(*first);
+}
+}  // namespace
+
 int SerialEvents::splits(FastSimulator& sim, const std::vector<int>& splits, PassStamps& stamps, std::vector<int>& touched) {
   const Topology& m = sim.topo_;
   int done = 0;

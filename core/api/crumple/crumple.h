@@ -22,6 +22,9 @@
 // Errors are crumple::Error exceptions (or, from the try_ functions, values) whose what() is one
 // line, the same text the `crumple` command prints after "crumple: error: ". A function that
 // fails changes nothing: there is no half-built sheet. Running out of memory is std::bad_alloc.
+// step() is the one exception: what fails once it has begun stepping (std::bad_alloc, or an
+// exception the event callback throws) is passed on, and since the time steps and mesh events
+// it applied cannot be undone, the sheet then refuses every later step() with UnstableError.
 //
 // The `crumple` command and the benchmarks' frame times run through this header too.
 #pragma once
@@ -90,7 +93,8 @@ struct FrameEvents {
 
 /// Thrown by step() when the state became unstable (a value not finite, a vertex gone or too
 /// fast, the mesh stretched to twice its rest length on average: the command's exit 3). The
-/// sheet keeps that state (stats() shows it) and refuses every further step with this error.
+/// sheet keeps that state (stats() shows it) and refuses every further step with this error,
+/// as it does after a step() that failed part way.
 class UnstableError : public Error {
  public:
   UnstableError(const std::string& what, const FrameEvents& events) : Error(what), events_(events) {}
@@ -140,7 +144,8 @@ class Sheet {
   /// at creation and again after every params.frame_dt of simulated time (every call when
   /// frame_dt equals params.frame_dt). Reads manipulators() first. Throws Error for a frame_dt
   /// that is negative, not finite or over 1 s, or an invalid manipulator (nothing is done), and
-  /// UnstableError for a state that became unstable.
+  /// UnstableError for a state that became unstable or a sheet whose earlier step() failed
+  /// part way (std::bad_alloc or the callback's exception, passed on at the time).
   FrameEvents step(double frame_dt);
   /// step() with the error as a value (empty when it succeeded). `events` receives what the
   /// call did, also when it failed (UnstableError::events; zeros when refused before stepping).

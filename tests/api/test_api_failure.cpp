@@ -1,0 +1,139 @@
+// A step that fails part way. Its own executable: it replaces the global operator new and delete
+// with versions that can be told to throw std::bad_alloc at one chosen allocation, so that
+// running out of memory can be tested at every allocation of a frame.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "crumple/crumple.h"
+#include "../support/fixed_step.h"
+
+namespace {
+std::atomic<std::uint64_t> g_allocations{0};  ///< operator new calls so far
+std::atomic<std::uint64_t> g_fail_at{0};      ///< the call that throws (0: none)
+
+void* allocate(std::size_t size, std::size_t align) {
+  if (++g_allocations == g_fail_at.load()) throw std::bad_alloc();
+  void* p = nullptr;
+  if (align <= alignof(std::max_align_t)) {
+    p = std::malloc(size ? size : 1);
+  } else if (posix_memalign(&p, align, size ? size : 1) != 0) {
+    p = nullptr;
+  }
+  if (!p) throw std::bad_alloc();
+  return p;
+}
+void* allocate_or_null(std::size_t size, std::size_t align) noexcept {
+  try {
+    return allocate(size, align);
+  } catch (const std::bad_alloc&) {
+    return nullptr;
+  }
+}
+}  // namespace
+
+// Every form, so that no allocation or release reaches another runtime's operator (the
+// sanitizers' among them) and each pointer is freed by the allocator that made it.
+void* operator new(std::size_t n) { return allocate(n, 0); }
+void* operator new[](std::size_t n) { return allocate(n, 0); }
+void* operator new(std::size_t n, std::align_val_t a) { return allocate(n, std::size_t(a)); }
+void* operator new[](std::size_t n, std::align_val_t a) { return allocate(n, std::size_t(a)); }
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept { return allocate_or_null(n, 0); }
+void* operator new[](std::size_t n, const std::nothrow_t&) noexcept { return allocate_or_null(n, 0); }
+void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return allocate_or_null(n, std::size_t(a));
+}
+void* operator new[](std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
+  return allocate_or_null(n, std::size_t(a));
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+
+namespace crumple {
+namespace {
+
+constexpr double kFrame = 1.0 / 60;
+
+// The paper's crumple on a small grid, on one thread (plain loops: every allocation on the
+// calling thread, in the same order on every run).
+Sheet crumpling_sheet(const std::string& backend) {
+  SheetDesc d;
+  d.grid = 24;
+  d.backend = backend;
+  d.threads = 1;
+  d.params = test::fixed_step_params();
+  d.params.scene = Scene::Sphere;
+  return Sheet::create(d);
+}
+
+struct Frame {
+  int index;                  ///< 0-based
+  std::uint64_t allocations;  ///< operator new calls inside its step()
+};
+
+// The frames of a crumple whose step() split or restored something and allocated.
+std::vector<Frame> frames_with_events(const std::string& backend, int frames) {
+  Sheet s = crumpling_sheet(backend);
+  std::vector<Frame> out;
+  for (int f = 0; f < frames; ++f) {
+    const std::uint64_t before = g_allocations;
+    const FrameEvents ev = s.step(kFrame);
+    const std::uint64_t calls = g_allocations - before;
+    if (ev.splits + ev.restores > 0 && calls > 0) out.push_back({f, calls});
+  }
+  return out;
+}
+
+class ApiFailure : public ::testing::TestWithParam<std::string> {};
+
+// A step cannot undo the time steps and mesh events it has already applied, so a step() that
+// throws after it began stepping (here std::bad_alloc, at each allocation of a frame with mesh
+// events in turn) must leave a sheet that refuses every later step() rather than one that steps
+// a half-edited mesh. Catches a step() that forgets its failure: the next call then steps on
+// (and may crash on the fast backend's half-taken ids).
+TEST_P(ApiFailure, AStepThatFailsPartWayRefusesEveryLaterStep) {
+  const std::vector<Frame> frames = frames_with_events(GetParam(), 60);
+  ASSERT_GE(frames.size(), 2u) << "no frame of the crumple had mesh events and allocations";
+  int failed = 0;
+  for (const Frame& frame : {frames.front(), frames[frames.size() / 2]}) {
+    for (std::uint64_t k = 1; k <= frame.allocations && !HasFailure(); ++k) {
+      Sheet s = crumpling_sheet(GetParam());
+      for (int f = 0; f < frame.index; ++f) s.step(kFrame);
+      bool threw = false;
+      g_fail_at = g_allocations + k;  // nothing else allocates until the step's k-th call
+      try {
+        s.step(kFrame);
+      } catch (const std::bad_alloc&) {
+        threw = true;
+      }
+      g_fail_at = 0;
+      ASSERT_TRUE(threw) << "frame " << frame.index << ", allocation " << k;
+      ++failed;
+      EXPECT_THROW(s.step(kFrame), UnstableError) << "frame " << frame.index << ", allocation " << k;
+      const std::string error = s.try_step(kFrame);
+      EXPECT_NE(error.find("a step failed part way"), std::string::npos) << error;
+      EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+    }
+  }
+  EXPECT_GT(failed, 1);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ApiFailure, ::testing::Values("fast", "reference"));
+
+}  // namespace
+}  // namespace crumple
