@@ -164,9 +164,15 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   try {
     advance(frame_dt, out);
     why = check_state();
-  } catch (const std::exception& e) {
+  } catch (...) {  // the callback may throw anything
     usable = false;  // first: the message below allocates, which may fail as the step did
-    broken = "a step failed part way at frame " + std::to_string(frame) + ": " + e.what();
+    broken = "a step failed part way at frame " + std::to_string(frame);
+    try {
+      throw;
+    } catch (const std::exception& e) {
+      broken += std::string(": ") + e.what();
+    } catch (...) {
+    }
     throw;
   }
   out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -203,6 +209,8 @@ std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
     impl_->step(frame_dt, out);
   } catch (const std::exception& e) {
     error = e.what();
+  } catch (...) {  // the event callback's own exception type, which step() recorded
+    error = impl_->broken.empty() ? "a step failed part way" : impl_->broken;
   }
   if (events) *events = out;
   return error;

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <new>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,38 @@ TEST_P(ApiFailure, AStepThatFailsPartWayRefusesEveryLaterStep) {
     }
   }
   EXPECT_GT(failed, 1);
+}
+
+// The event callback is the caller's code and may throw anything, std::exception or not: the
+// step() it throws from passes it on (try_step() returns it as its line), and the sheet refuses
+// every later step(). Catches a step() that marks only std::exception failures (the int below
+// then steps on) and a try_step() that lets a non-standard exception out (std::terminate).
+TEST_P(ApiFailure, ACallbackThatThrowsLeavesTheSheetRefusingSteps) {
+  for (const bool standard : {true, false}) {
+    Sheet s = crumpling_sheet(GetParam());
+    s.on_events([&](const StepEventIds&) {
+      if (standard) throw std::runtime_error("the engine's callback failed");
+      throw 7;
+    });
+    int frame = 0;
+    std::string error;
+    while (error.empty() && frame < 60) {
+      ++frame;
+      if (!standard) {
+        error = s.try_step(kFrame);
+        continue;
+      }
+      try {
+        s.step(kFrame);
+      } catch (const std::runtime_error& e) {
+        error = e.what();
+      }
+    }
+    const std::string part_way = "a step failed part way at frame " + std::to_string(frame);
+    EXPECT_EQ(error, standard ? "the engine's callback failed" : part_way);
+    EXPECT_EQ(s.try_step(kFrame), part_way + (standard ? ": the engine's callback failed" : ""));
+    EXPECT_THROW(s.step(kFrame), UnstableError);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ApiFailure, ::testing::Values("fast", "reference"));

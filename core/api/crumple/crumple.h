@@ -147,8 +147,10 @@ class Sheet {
   /// UnstableError for a state that became unstable or a sheet whose earlier step() failed
   /// part way (std::bad_alloc or the callback's exception, passed on at the time).
   FrameEvents step(double frame_dt);
-  /// step() with the error as a value (empty when it succeeded). `events` receives what the
-  /// call did, also when it failed (UnstableError::events; zeros when refused before stepping).
+  /// step() with the error as a value (empty when it succeeded; a callback's exception not
+  /// derived from std::exception gives step()'s "a step failed part way" line). `events`
+  /// receives what the call did, also when it failed (UnstableError::events; zeros when refused
+  /// before stepping).
   std::string try_step(double frame_dt, FrameEvents* events = nullptr) noexcept;
 
   /// Totals over the current state (see SheetStats).
