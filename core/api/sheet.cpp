@@ -39,6 +39,7 @@ struct Sheet::Impl {
   int frames = 0;              ///< step() calls
   std::uint64_t generation = 0;
   bool usable = true;          ///< false once unstable or after a step() that failed part way
+  bool half_stepped = false;   ///< a step() failed part way: the backend's state is not whole
   std::string broken;          ///< why it is not usable (best effort: building it may fail)
 
   void begin_block();
@@ -165,7 +166,7 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
     advance(frame_dt, out);
     why = check_state();
   } catch (...) {  // the callback may throw anything
-    usable = false;  // first: the message below allocates, which may fail as the step did
+    usable = false, half_stepped = true;  // first: the message below allocates, which may fail too
     broken = "a step failed part way at frame " + std::to_string(frame);
     try {
       throw;
@@ -217,7 +218,10 @@ std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
 }
 
 const SheetStats& Sheet::stats() const { return impl_->stats; }
-void Sheet::write_obj(std::FILE* file) const { write_snapshot_obj(file, impl_->sim->snapshot()); }
+void Sheet::write_obj(std::FILE* file) const {
+  if (impl_->half_stepped) throw Error(impl_->broken.empty() ? "a step failed part way" : impl_->broken);
+  write_snapshot_obj(file, impl_->sim->snapshot());
+}
 
 Manipulators& Sheet::manipulators() { return impl_->manip; }
 const Manipulators& Sheet::manipulators() const { return impl_->manip; }

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
 #include <stdexcept>
@@ -105,8 +106,8 @@ class ApiFailure : public ::testing::TestWithParam<std::string> {};
 // A step cannot undo the time steps and mesh events it has already applied, so a step() that
 // throws after it began stepping (here std::bad_alloc, at each allocation of a frame with mesh
 // events in turn) must leave a sheet that refuses every later step() rather than one that steps
-// a half-edited mesh. Catches a step() that forgets its failure: the next call then steps on
-// (and may crash on the fast backend's half-taken ids).
+// a half-edited mesh, and that will not write that mesh as an OBJ. Catches a step() that forgets
+// its failure: the next call then steps on (and may crash on the fast backend's half-taken ids).
 TEST_P(ApiFailure, AStepThatFailsPartWayRefusesEveryLaterStep) {
   const std::vector<Frame> frames = frames_with_events(GetParam(), 60);
   ASSERT_GE(frames.size(), 2u) << "no frame of the crumple had mesh events and allocations";
@@ -129,6 +130,10 @@ TEST_P(ApiFailure, AStepThatFailsPartWayRefusesEveryLaterStep) {
       const std::string error = s.try_step(kFrame);
       EXPECT_NE(error.find("a step failed part way"), std::string::npos) << error;
       EXPECT_EQ(error.find('\n'), std::string::npos) << error;
+      std::FILE* obj = std::tmpfile();
+      ASSERT_NE(obj, nullptr);
+      EXPECT_THROW(s.write_obj(obj), Error);  // the backend's mesh may be half edited
+      std::fclose(obj);
     }
   }
   EXPECT_GT(failed, 1);

@@ -158,7 +158,8 @@ class Sheet {
   /// Writes the current state as an OBJ, byte for byte the command's final.obj: a comment
   /// line, the live vertices renumbered densely in id order (`v x y z`, %.9g), the live
   /// triangles (`f a b c`, 1-based) and each crease's auxiliary spring as `l a b`. Write errors
-  /// are left in std::ferror(file) for the caller, who checks it before closing.
+  /// are left in std::ferror(file) for the caller, who checks it before closing. Throws Error
+  /// after a step() that failed part way (its state is half stepped: D34).
   void write_obj(std::FILE* file) const;
 
   /// The caller's spheres, planes, pins and grabs (sim/manipulators.h): edit them freely
