@@ -159,7 +159,7 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   // From here on a failure (std::bad_alloc, an exception from the event callback) comes after
   // state has changed: time steps and mesh events cannot be undone, and a pass stopped part way
   // leaves the backend's mesh half edited, so the sheet refuses every later step.
-  // (The instability check is part of it: a frame whose check failed was never checked.)
+  // The instability check is inside too: a frame whose check threw was never checked.
   const int frame = frames + 1;
   std::string why;
   try {
