@@ -45,6 +45,7 @@ struct Sheet::Impl {
   void begin_block();
   void take_step(FrameEvents& out);
   void advance(double frame_dt, FrameEvents& out);  ///< the steps of a frame and its render buffers
+  void fail_part_way(int frame, const char* what) noexcept;  ///< what (nullptr: not a std::exception)
   std::string check_state();
   void step(double frame_dt, FrameEvents& out);
 };
@@ -146,9 +147,6 @@ std::string Sheet::Impl::check_state() {
   return instability(t, size);
 }
 
-// Steps while at least one whole h is owed. The tolerance of a millionth of h absorbs the
-// rounding of frame_dt / substeps, so a frame_dt equal to params.frame_dt takes exactly
-// `substeps` steps every call.
 void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   if (!usable) throw UnstableError(broken.empty() ? "a step failed part way" : broken, out);
   if (!std::isfinite(frame_dt) || frame_dt < 0 || frame_dt > 1)
@@ -158,22 +156,18 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   const auto t0 = std::chrono::steady_clock::now();
   // From here on a failure (std::bad_alloc, an exception from the event callback) comes after
   // state has changed: time steps and mesh events cannot be undone, and a pass stopped part way
-  // leaves the backend's mesh half edited, so the sheet refuses every later step.
-  // The instability check is inside too: a frame whose check threw was never checked.
+  // leaves the backend's mesh half edited, so the sheet refuses every later step (D34). The
+  // instability check is inside too: a frame whose check threw was never checked.
   const int frame = frames + 1;
   std::string why;
   try {
     advance(frame_dt, out);
     why = check_state();
+  } catch (const std::exception& e) {
+    fail_part_way(frame, e.what());
+    throw;
   } catch (...) {  // the callback may throw anything
-    usable = false, half_stepped = true;  // first: the message below allocates, which may fail too
-    broken = "a step failed part way at frame " + std::to_string(frame);
-    try {
-      throw;
-    } catch (const std::exception& e) {
-      broken += std::string(": ") + e.what();
-    } catch (...) {
-    }
+    fail_part_way(frame, nullptr);
     throw;
   }
   out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -184,6 +178,9 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   }
 }
 
+// Steps while at least one whole h is owed. The tolerance of a millionth of h absorbs the
+// rounding of frame_dt / substeps, so a frame_dt equal to params.frame_dt takes exactly
+// `substeps` steps every call.
 void Sheet::Impl::advance(double frame_dt, FrameEvents& out) {
   sim->set_manipulators(manip);
   carry += frame_dt;
@@ -195,6 +192,16 @@ void Sheet::Impl::advance(double frame_dt, FrameEvents& out) {
   out.topology_changed = out.splits + out.restores > 0;
   if (out.topology_changed) ++generation;
   sim->render(buffers, out.topology_changed);
+}
+
+// Marks the sheet before its message is built: building it allocates, which may fail as the step
+// did, and must not replace the exception in flight (its caller rethrows that one).
+void Sheet::Impl::fail_part_way(int frame, const char* what) noexcept {
+  usable = false, half_stepped = true;
+  try {
+    broken = "a step failed part way at frame " + std::to_string(frame) + (what ? std::string(": ") + what : "");
+  } catch (const std::exception&) {  // no memory for the line: the refusal has its short form
+  }
 }
 
 FrameEvents Sheet::step(double frame_dt) {

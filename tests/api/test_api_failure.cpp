@@ -30,6 +30,15 @@ void* allocate(std::size_t size, std::size_t align) {
   if (!p) throw std::bad_alloc();
   return p;
 }
+/// Arms the failure of allocation `call` (a count of g_allocations) for its scope, whatever the
+/// scope throws.
+struct FailAt {
+  explicit FailAt(std::uint64_t call) { g_fail_at = call; }
+  ~FailAt() { g_fail_at = 0; }
+  FailAt(const FailAt&) = delete;
+  FailAt& operator=(const FailAt&) = delete;
+};
+
 void* allocate_or_null(std::size_t size, std::size_t align) noexcept {
   try {
     return allocate(size, align);
@@ -117,13 +126,14 @@ TEST_P(ApiFailure, AStepThatFailsPartWayRefusesEveryLaterStep) {
       Sheet s = crumpling_sheet(GetParam());
       for (int f = 0; f < frame.index; ++f) s.step(kFrame);
       bool threw = false;
-      g_fail_at = g_allocations + k;  // nothing else allocates until the step's k-th call
-      try {
-        s.step(kFrame);
-      } catch (const std::bad_alloc&) {
-        threw = true;
+      {
+        const FailAt fail(g_allocations + k);  // nothing else allocates until the step's k-th call
+        try {
+          s.step(kFrame);
+        } catch (const std::bad_alloc&) {
+          threw = true;
+        }
       }
-      g_fail_at = 0;
       ASSERT_TRUE(threw) << "frame " << frame.index << ", allocation " << k;
       ++failed;
       EXPECT_THROW(s.step(kFrame), UnstableError) << "frame " << frame.index << ", allocation " << k;
