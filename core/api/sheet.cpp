@@ -38,15 +38,17 @@ struct Sheet::Impl {
   int block_left = 0;          ///< auto_substeps: steps left before the count is chosen again
   int frames = 0;              ///< step() calls
   std::uint64_t generation = 0;
-  bool usable = true;          ///< false once unstable or after a step() that failed part way
-  bool half_stepped = false;   ///< a step() failed part way: the backend's state is not whole
-  std::string broken;          ///< why it is not usable (best effort: building it may fail)
+  /// Whether step() may run: not once the state became unstable, nor after a step() that
+  /// failed part way (the backend's state is then not whole: D34).
+  enum class Health { Fine, Unstable, HalfStepped } health = Health::Fine;
+  std::string broken;          ///< why it is not Fine (best effort: building it may fail)
 
   void begin_block();
   void take_step(FrameEvents& out);
   void advance(double frame_dt, FrameEvents& out);  ///< the steps of a frame and its render buffers
   void fail_part_way(int frame, const char* what) noexcept;  ///< what (nullptr: not a std::exception)
   std::string check_state();
+  std::string refusal() const { return broken.empty() ? "a step failed part way" : broken; }
   void step(double frame_dt, FrameEvents& out);
 };
 
@@ -148,7 +150,7 @@ std::string Sheet::Impl::check_state() {
 }
 
 void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
-  if (!usable) throw UnstableError(broken.empty() ? "a step failed part way" : broken, out);
+  if (health != Health::Fine) throw UnstableError(refusal(), out);
   if (!std::isfinite(frame_dt) || frame_dt < 0 || frame_dt > 1)
     throw Error("frame_dt must be a finite number in [0, 1] seconds");
   if (std::string m = api::check_manipulators(manip, int(buffers.positions.size() / 3)); !m.empty())
@@ -172,7 +174,7 @@ void Sheet::Impl::step(double frame_dt, FrameEvents& out) {
   }
   out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!why.empty()) {
-    usable = false;
+    health = Health::Unstable;
     broken = "simulation became unstable at frame " + std::to_string(frames) + ": " + why;
     throw UnstableError(broken, out);
   }
@@ -197,7 +199,7 @@ void Sheet::Impl::advance(double frame_dt, FrameEvents& out) {
 // Marks the sheet before its message is built: building it allocates, which may fail as the step
 // did, and must not replace the exception in flight (its caller rethrows that one).
 void Sheet::Impl::fail_part_way(int frame, const char* what) noexcept {
-  usable = false, half_stepped = true;
+  health = Health::HalfStepped;
   try {
     broken = "a step failed part way at frame " + std::to_string(frame) + (what ? std::string(": ") + what : "");
   } catch (const std::exception&) {  // no memory for the line: the refusal has its short form
@@ -218,7 +220,7 @@ std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
   } catch (const std::exception& e) {
     error = e.what();
   } catch (...) {  // the event callback's own exception type, which step() recorded
-    error = impl_->broken.empty() ? "a step failed part way" : impl_->broken;
+    error = impl_->refusal();
   }
   if (events) *events = out;
   return error;
@@ -226,7 +228,7 @@ std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
 
 const SheetStats& Sheet::stats() const { return impl_->stats; }
 void Sheet::write_obj(std::FILE* file) const {
-  if (impl_->half_stepped) throw Error(impl_->broken.empty() ? "a step failed part way" : impl_->broken);
+  if (impl_->health == Impl::Health::HalfStepped) throw Error(impl_->refusal());
   write_snapshot_obj(file, impl_->sim->snapshot());
 }
 
