@@ -298,7 +298,7 @@ void FastSimulator::apply_split(const SplitPlan& plan) {
   // no later split of the pass changes these triangles: the stamps skip it).
   const float unit = length_unit();
   for (int t : rec.t)
-    if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);
+    if (t >= 0) triangle_area(m, unit, m.T.area.data(), t);
 }
 
 bool FastSimulator::can_restore(int e) const {
@@ -372,7 +372,7 @@ Freed FastSimulator::restore_edge_local(int e) {
   relink_restore(m, e, s);
   const float unit = length_unit();
   for (int t : {s.t[0], s.t[2]})  // as after a split; the two released triangles' areas are 0
-    if (t >= 0) triangle_areas(m, unit, m.T.area.data(), t, t + 1);
+    if (t >= 0) triangle_area(m, unit, m.T.area.data(), t);
   Freed freed;
   for (int q = 0; q < 4; ++q)
     if (s.e[q] >= 0) m.release_edge(s.e[q]), freed.edges[q] = s.e[q];

@@ -15,8 +15,14 @@ const char* to_string(Pass p) {
   return names[int(p)];
 }
 
+namespace {
+/// A power of two near 1 / the sheet's size (1 for a sheet of no size): the scale of the area
+/// vectors' edges (triangle_areas), which keeps a tiny mesh's products out of float's subnormals.
+float unit_of_length(double size) { return size > 0 ? std::ldexp(1.0f, -std::ilogb(size)) : 1.0f; }
+}  // namespace
+
 FastSimulator::FastSimulator(const InputMesh& input, const Params& params, int threads)
-    : params_(params), scene_(make_scene(input, params)), par_(threads) {
+    : params_(params), scene_(make_scene(input, params)), length_unit_(unit_of_length(scene_.size)), par_(threads) {
   if (params_.integrator == Integrator::Implicit)
     throw std::invalid_argument("the fast backend has no Baraff-Witkin integrator; use --backend reference");
   const int nv = int(input.positions.size());
@@ -81,9 +87,6 @@ StepConstants FastSimulator::step_constants() const {
 // them by it first. Exact (a power of two changes no significand), so results do not change;
 // a mesh of size 1e-12 then computes its areas and lengths as one of size 1 would, where float's
 // subnormals (below 1.2e-38, so areas of edges below ~1e-10) would lose them (D20, issue 14).
-float FastSimulator::length_unit() const {
-  return scene_.size > 0 ? std::ldexp(1.0f, -std::ilogb(scene_.size)) : 1.0f;
-}
 
 void FastSimulator::compute_normals() {
   const float unit = length_unit();

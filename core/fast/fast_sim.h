@@ -160,7 +160,7 @@ class FastSimulator final : public Simulator {
   void list_event_ids(StepEvents& ev) const;
   void list_event_ids_by_flags(StepEvents& ev) const;
   void renew_normals_of_touched();  ///< the serial edits' renewal, after all events
-  float length_unit() const;  ///< a power of two near 1 / sheet size (fast_sim.cpp)
+  float length_unit() const { return length_unit_; }  ///< a power of two near 1 / sheet size (unit_of_length)
   double margin(int e, double budget) const; ///< Decision::margin of slot e on the current normals (decide())
   // One event's edits (fast_edits.cpp).
   SplitCandidate split_candidate(int e) const;
@@ -185,6 +185,7 @@ class FastSimulator final : public Simulator {
   Params params_;
   AdaptClock adapt_clock_;  ///< which steps run the fracture/restoration pass
   SceneSetup scene_;
+  float length_unit_ = 1;  ///< length_unit(): fixed by the scene, read by every event
   Parallel par_;
   Topology topo_;
   double time_ = 0;

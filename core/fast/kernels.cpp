@@ -31,6 +31,16 @@ namespace {
 // gains nothing from a prefetch (docs/PERFORMANCE.md).
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
 
+// One triangle's area vector: the loop body of triangle_areas and the whole of triangle_area,
+// so that an event's areas and the pass's are the same bits.
+inline Float4 area_of(const Face& f, std::uint8_t alive, const Float4* xm, float unit) {
+  const Float4 pa = xm[f.v[0]], pb = xm[f.v[1]], pc = xm[f.v[2]];
+  const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
+  const float wx = (pc.x - pa.x) * unit, wy = (pc.y - pa.y) * unit, wz = (pc.z - pa.z) * unit;
+  const float on = alive ? 1.0f : 0.0f;
+  return Float4{on * (uy * wz - uz * wy), on * (uz * wx - ux * wz), on * (ux * wy - uy * wx), 0.0f};
+}
+
 CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, const std::uint8_t* __restrict alive,
                                                const Float4* __restrict xm, float unit, Float4* __restrict area,
                                                int begin, int end) {
@@ -39,18 +49,17 @@ CRUMPLE_SCALAR_KERNEL void triangle_areas_body(const Face* __restrict faces, con
       const Face& next = faces[t + kTriangleAhead];
       for (int k = 0; k < 3; ++k) __builtin_prefetch(&xm[next.v[k]]);
     }
-    const Face& f = faces[t];
-    const Float4 pa = xm[f.v[0]], pb = xm[f.v[1]], pc = xm[f.v[2]];
-    const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
-    const float wx = (pc.x - pa.x) * unit, wy = (pc.y - pa.y) * unit, wz = (pc.z - pa.z) * unit;
-    const float on = alive[t] ? 1.0f : 0.0f;
-    area[t] = Float4{on * (uy * wz - uz * wy), on * (uz * wx - ux * wz), on * (ux * wy - uy * wx), 0.0f};
+    area[t] = area_of(faces[t], alive[t], xm, unit);
   }
 }
 }  // namespace
 
 void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end) {
   triangle_areas_body(m.T.slots.data(), m.T.alive.data(), m.V.xm.data(), unit, area, begin, end);
+}
+
+CRUMPLE_SCALAR_KERNEL void triangle_area(const Topology& m, float unit, Float4* area, int t) {
+  area[t] = area_of(m.T[t], m.T.alive[std::size_t(t)], m.V.xm.data(), unit);
 }
 
 namespace {

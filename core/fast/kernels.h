@@ -36,6 +36,8 @@ struct StepConstants {
 /// before the product, which changes no normal's bits and keeps a tiny mesh's products out of
 /// float's subnormals.                                                                 §1
 void triangle_areas(const Topology& m, float unit, Float4* area, int begin, int end);
+/// The same for one triangle t: an event's, without the pass's loop and prefetches.     §1
+void triangle_area(const Topology& m, float unit, Float4* area, int t);
 /// n_v = normalized sum of the area vectors (m.T.area) of v's triangles, into normals[v] (the
 /// mesh's own V.nr: the normals outlive the step).                                      §1
 void vertex_normals(const Topology& m, Float4* normals, int begin, int end);
