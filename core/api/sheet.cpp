@@ -53,6 +53,11 @@ struct Sheet::Impl {
 };
 
 namespace {
+/// try_step's line when no memory is left to copy the step's own: short enough for an empty
+/// std::string's own buffer (the small-string room), so assigning it allocates nothing.
+constexpr char kNoMemoryLine[] = "out of memory";
+static_assert(sizeof(kNoMemoryLine) - 1 <= std::string().capacity());
+
 SheetStats to_stats(const Totals& t) {
   SheetStats s;
   s.vertices = t.vertices;
@@ -216,11 +221,15 @@ std::string Sheet::try_step(double frame_dt, FrameEvents* events) noexcept {
   FrameEvents out;
   std::string error;
   try {
-    impl_->step(frame_dt, out);
-  } catch (const std::exception& e) {
-    error = e.what();
-  } catch (...) {  // the event callback's own exception type, which step() recorded
-    error = impl_->refusal();
+    try {
+      impl_->step(frame_dt, out);
+    } catch (const std::exception& e) {
+      error = e.what();
+    } catch (...) {  // the event callback's own exception type, which step() recorded
+      error = impl_->refusal();
+    }
+  } catch (...) {  // no memory for a copy of the line: a failed assignment left `error` empty,
+    error = kNoMemoryLine;  // and this line fits in its own buffer (no allocation)
   }
   if (events) *events = out;
   return error;

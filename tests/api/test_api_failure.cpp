@@ -18,9 +18,10 @@
 namespace {
 std::atomic<std::uint64_t> g_allocations{0};  ///< operator new calls so far
 std::atomic<std::uint64_t> g_fail_at{0};      ///< the call that throws (0: none)
+std::atomic<bool> g_fail_all{false};          ///< every call throws (no memory left at all)
 
 void* allocate(std::size_t size, std::size_t align) {
-  if (++g_allocations == g_fail_at.load()) throw std::bad_alloc();
+  if (++g_allocations == g_fail_at.load() || g_fail_all) throw std::bad_alloc();
   void* p = nullptr;
   if (align <= alignof(std::max_align_t)) {
     p = std::malloc(size ? size : 1);
@@ -179,6 +180,26 @@ TEST_P(ApiFailure, ACallbackThatThrowsLeavesTheSheetRefusingSteps) {
     EXPECT_EQ(s.try_step(kFrame), part_way + (standard ? ": the engine's callback failed" : ""));
     EXPECT_THROW(s.step(kFrame), UnstableError);
   }
+}
+
+// With no memory left at all from the callback's throw on, try_step() cannot copy the failure's
+// line (longer than a string's own buffer) and, being noexcept, must still return: "out of
+// memory". The sheet's own line could not be built either, so later calls give its short form.
+// Catches a try_step() whose copy of the line throws out of its catch (std::terminate ends the
+// test binary) and a step() whose failed line build replaces the exception in flight.
+TEST_P(ApiFailure, TryStepReturnsALineWhenNoMemoryIsLeft) {
+  Sheet s = crumpling_sheet(GetParam());
+  const std::runtime_error failure(std::string(200, 'x'));  // copied without allocating (shared)
+  s.on_events([&](const StepEventIds&) {
+    g_fail_all = true;
+    throw failure;
+  });
+  std::string error;
+  for (int frame = 0; frame < 60 && error.empty(); ++frame) error = s.try_step(kFrame);
+  g_fail_all = false;
+  EXPECT_EQ(error, "out of memory");
+  EXPECT_EQ(s.try_step(kFrame), "a step failed part way");
+  EXPECT_THROW(s.step(kFrame), UnstableError);
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ApiFailure, ::testing::Values("fast", "reference"));

@@ -148,7 +148,8 @@ class Sheet {
   /// part way (std::bad_alloc or the callback's exception, passed on at the time).
   FrameEvents step(double frame_dt);
   /// step() with the error as a value (empty when it succeeded; a callback's exception not
-  /// derived from std::exception gives step()'s "a step failed part way" line). `events`
+  /// derived from std::exception gives step()'s "a step failed part way" line; "out of memory"
+  /// when no memory is left to copy the line itself). `events`
   /// receives what the call did, also when it failed (UnstableError::events; zeros when refused
   /// before stepping).
   std::string try_step(double frame_dt, FrameEvents* events = nullptr) noexcept;
