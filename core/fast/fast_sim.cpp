@@ -16,8 +16,11 @@ const char* to_string(Pass p) {
 }
 
 namespace {
-/// A power of two near 1 / the sheet's size (1 for a sheet of no size): the scale of the area
-/// vectors' edges (triangle_areas), which keeps a tiny mesh's products out of float's subnormals.
+// The power of two nearest 1/sheet size (1 for a sheet of no size): the kernels that multiply
+// or square lengths scale them by it first. Exact (a power of two changes no significand), so
+// results do not change; a mesh of size 1e-12 then computes its areas and lengths as one of
+// size 1 would, where float's subnormals (below 1.2e-38, so areas of edges below ~1e-10) would
+// lose them (D20, issue 14).
 float unit_of_length(double size) { return size > 0 ? std::ldexp(1.0f, -std::ilogb(size)) : 1.0f; }
 }  // namespace
 
@@ -82,11 +85,6 @@ StepConstants FastSimulator::step_constants() const {
   c.bounded = params_.predictor == Predictor::Bounded;
   return c;
 }
-
-// The power of two nearest 1/sheet size: the kernels that multiply or square lengths scale
-// them by it first. Exact (a power of two changes no significand), so results do not change;
-// a mesh of size 1e-12 then computes its areas and lengths as one of size 1 would, where float's
-// subnormals (below 1.2e-38, so areas of edges below ~1e-10) would lose them (D20, issue 14).
 
 void FastSimulator::compute_normals() {
   const float unit = length_unit();

@@ -101,21 +101,29 @@ void prefetch_rows(const Float4* rows, const std::int32_t* list, int count, int 
 }
 }  // namespace
 
+namespace {
+// One vertex's normal: the loop body of vertex_normals and the whole of vertex_normal, so that
+// an event's normals and the pass's are the same bits.
+inline Float4 normal_of(const ListHead& head, const std::int32_t* tris, const Float4* area) {
+  Row4 sum = Row4::zero();
+  for_list(tris + head.at, head.count, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
+  const float sx = sum[0], sy = sum[1], sz = sum[2];
+  const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
+  const float inv = len > 0 ? 1.0f / len : 0.0f;
+  return Float4{sx * inv, sy * inv, sz * inv, 0.0f};
+}
+}  // namespace
+
 void vertex_normals(const Topology& m, Float4* normals, int begin, int end) {
   const ListHead* __restrict heads = m.V.tri_list.data();
   const std::int32_t* __restrict tris = m.V.tris.data();
   const Float4* __restrict area = m.T.area.data();
   Float4* __restrict n_out = normals;
-  for (int v = begin; v < end; ++v) {
-    Row4 sum = Row4::zero();
-    const std::int32_t* list = tris + heads[v].at;
-    const int n = heads[v].count;
-    for_list(list, n, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
-    const float sx = sum[0], sy = sum[1], sz = sum[2];
-    const float len = std::sqrt(sx * sx + sy * sy + sz * sz);
-    const float inv = len > 0 ? 1.0f / len : 0.0f;
-    n_out[v] = Float4{sx * inv, sy * inv, sz * inv, 0.0f};
-  }
+  for (int v = begin; v < end; ++v) n_out[v] = normal_of(heads[v], tris, area);
+}
+
+void vertex_normal(const Topology& m, Float4* normals, int v) {
+  normals[v] = normal_of(m.V.tri_list[std::size_t(v)], m.V.tris.data(), m.T.area.data());
 }
 
 namespace {

@@ -41,6 +41,8 @@ void triangle_area(const Topology& m, float unit, Float4* area, int t);
 /// n_v = normalized sum of the area vectors (m.T.area) of v's triangles, into normals[v] (the
 /// mesh's own V.nr: the normals outlive the step).                                      §1
 void vertex_normals(const Topology& m, Float4* normals, int begin, int end);
+/// The same for one vertex v: an event's renewal, without the pass's loop.               §1
+void vertex_normal(const Topology& m, Float4* normals, int v);
 /// Per edge, from the vertex rows, into out[e]: the spring force on endpoint a (Hookean with
 /// kappa_e [Eq 5], damping), and the bending magnitude s C_beta B and balanced mean of its
 /// stencil [Eq 8-9].

@@ -58,7 +58,7 @@ void RestoreWaves::applied_edges(const std::vector<int>& restores, std::vector<i
 void RestoreWaves::renew_normals(FastSimulator& sim, const std::array<int, 5>& verts) {
   Topology& m = sim.topo_;
   for (int q = 1; q < 5; ++q)
-    if (verts[q] >= 0) vertex_normals(m, m.V.nr.data(), verts[q], verts[q] + 1);
+    if (verts[q] >= 0) vertex_normal(m, m.V.nr.data(), verts[q]);
 }
 
 std::vector<RestoreWaves::Applied> RestoreWaves::applied() const {

@@ -177,10 +177,10 @@ void SplitRounds::renew_normals(FastSimulator& sim, const SplitPlan& plan, int r
   Topology& m = sim.topo_;
   for (int v : plan.ends) {
     if (v < 0 || tally_[v].round_last != round) continue;
-    vertex_normals(m, m.V.nr.data(), v, v + 1);
+    vertex_normal(m, m.V.nr.data(), v);
     tally_[v] = Tally{};  // the vertex's last split of the pass
   }
-  vertex_normals(m, m.V.nr.data(), plan.n, plan.n + 1);
+  vertex_normal(m, m.V.nr.data(), plan.n);
 }
 
 }  // namespace crumple::fast
