@@ -166,7 +166,8 @@ void FastSimulator::collect_events() {
 // The serial edits' renewal (the oracle of the rounds' and waves' renewal event by event): after
 // all the events, the normal of each vertex an event changed a triangle at, once or more (each
 // normal is a function of its final list and areas alone, so repeats and order change nothing).
-// Each split and restore computed its own triangles' areas.
+// Each split and restore computed its own triangles' areas. Through the pass's kernel rather
+// than the events' vertex_normal, so that the comparison also checks that the two agree.
 void FastSimulator::renew_normals_of_touched() {
   for (int v : touched_) vertex_normals(topo_, topo_.V.nr.data(), v, v + 1);
 }

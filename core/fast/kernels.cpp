@@ -32,8 +32,9 @@ namespace {
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
 
 // One triangle's area vector: the loop body of triangle_areas and the whole of triangle_area,
-// so that an event's areas and the pass's are the same bits.
-inline Float4 area_of(const Face& f, std::uint8_t alive, const Float4* xm, float unit) {
+// so that an event's areas and the pass's are the same bits. Both callers are scalar kernels:
+// vectorized in one and not the other, the products could contract into FMAs differently.
+[[gnu::always_inline]] inline Float4 area_of(const Face& f, std::uint8_t alive, const Float4* xm, float unit) {
   const Float4 pa = xm[f.v[0]], pb = xm[f.v[1]], pc = xm[f.v[2]];
   const float ux = (pb.x - pa.x) * unit, uy = (pb.y - pa.y) * unit, uz = (pb.z - pa.z) * unit;
   const float wx = (pc.x - pa.x) * unit, wy = (pc.y - pa.y) * unit, wz = (pc.z - pa.z) * unit;
@@ -103,8 +104,9 @@ void prefetch_rows(const Float4* rows, const std::int32_t* list, int count, int 
 
 namespace {
 // One vertex's normal: the loop body of vertex_normals and the whole of vertex_normal, so that
-// an event's normals and the pass's are the same bits.
-inline Float4 normal_of(const ListHead& head, const std::int32_t* tris, const Float4* area) {
+// an event's normals and the pass's are the same bits (inlined in both: check_simd.sh reads the
+// row sum's packed adds in vertex_normals itself).
+[[gnu::always_inline]] inline Float4 normal_of(const ListHead& head, const std::int32_t* tris, const Float4* area) {
   Row4 sum = Row4::zero();
   for_list(tris + head.at, head.count, [&](int x, bool in) { sum += Row4::load(in ? &area[x >> 2] : &kZero4); });
   const float sx = sum[0], sy = sum[1], sz = sum[2];

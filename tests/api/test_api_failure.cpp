@@ -40,6 +40,14 @@ struct FailAt {
   FailAt& operator=(const FailAt&) = delete;
 };
 
+/// Disarms the failure of every allocation (set by the code under test) when its scope ends.
+struct FailAll {
+  FailAll() = default;
+  ~FailAll() { g_fail_all = false; }
+  FailAll(const FailAll&) = delete;
+  FailAll& operator=(const FailAll&) = delete;
+};
+
 void* allocate_or_null(std::size_t size, std::size_t align) noexcept {
   try {
     return allocate(size, align);
@@ -183,23 +191,31 @@ TEST_P(ApiFailure, ACallbackThatThrowsLeavesTheSheetRefusingSteps) {
 }
 
 // With no memory left at all from the callback's throw on, try_step() cannot copy the failure's
-// line (longer than a string's own buffer) and, being noexcept, must still return: "out of
-// memory". The sheet's own line could not be built either, so later calls give its short form.
-// Catches a try_step() whose copy of the line throws out of its catch (std::terminate ends the
-// test binary) and a step() whose failed line build replaces the exception in flight.
+// line (a std::exception's what(), or the sheet's line for another type: both longer than a
+// string's own buffer) and, being noexcept, must still return: "out of memory". The sheet's own
+// line could not be built either, so later calls give its short form. Catches a try_step() whose
+// copy of the line throws out of its handler (std::terminate ends the test binary) and a step()
+// whose failed line build replaces the exception in flight.
 TEST_P(ApiFailure, TryStepReturnsALineWhenNoMemoryIsLeft) {
-  Sheet s = crumpling_sheet(GetParam());
-  const std::runtime_error failure(std::string(200, 'x'));  // copied without allocating (shared)
-  s.on_events([&](const StepEventIds&) {
-    g_fail_all = true;
-    throw failure;
-  });
-  std::string error;
-  for (int frame = 0; frame < 60 && error.empty(); ++frame) error = s.try_step(kFrame);
-  g_fail_all = false;
-  EXPECT_EQ(error, "out of memory");
-  EXPECT_EQ(s.try_step(kFrame), "a step failed part way");
-  EXPECT_THROW(s.step(kFrame), UnstableError);
+  for (const bool standard : {true, false}) {
+    Sheet s = crumpling_sheet(GetParam());
+    const std::runtime_error failure(std::string(200, 'x'));  // copied without allocating (shared)
+    bool armed = false;
+    s.on_events([&](const StepEventIds&) {
+      if (!armed) armed = true, g_fail_all = true;  // once: a later call must not fail gtest's own allocations
+      if (standard) throw failure;
+      throw 7;
+    });
+    std::string error;
+    {
+      const FailAll until_scope_end;  // disarmed however the loop ends
+      for (int frame = 0; frame < 60 && error.empty(); ++frame) error = s.try_step(kFrame);
+    }
+    ASSERT_TRUE(armed) << "no frame of the crumple had mesh events";
+    EXPECT_EQ(error, "out of memory");
+    EXPECT_EQ(s.try_step(kFrame), "a step failed part way");
+    EXPECT_THROW(s.step(kFrame), UnstableError);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ApiFailure, ::testing::Values("fast", "reference"));
