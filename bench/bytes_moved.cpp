@@ -32,8 +32,9 @@ double normals(const LayoutSizes& s) {
 }
 
 // Per edge slot its record in (a, b, wl, wr, l0, flags read; the record is read whole) and the
-// 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its three rows.
-double edge_forces(const LayoutSizes& s) { return s.edges * (kEdge + kOut) + s.vertices * 3 * kF4; }
+// 32-byte EdgeOut out; per vertex (endpoints and wings, each once) its position and normal rows
+// (and its velocity row where springs are damped, which no benchmark's configuration does).
+double edge_forces(const LayoutSizes& s) { return s.edges * (kEdge + kOut) + s.vertices * 2 * kF4; }
 
 // Per vertex its spring, neighbour and wing lists (the neighbours' block shares the springs'
 // head), its velocity and normal rows

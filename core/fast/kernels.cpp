@@ -27,8 +27,8 @@ namespace crumple::fast {
 namespace {
 // The scalar kernels prefetch the rows read by the element a fixed distance ahead: an element is
 // tens of instructions, so the core's reorder window spans only a few elements and few of their
-// misses overlap. The eight-lane edge pass issues its 80 row loads before any arithmetic and
-// gains nothing from a prefetch (docs/PERFORMANCE.md).
+// misses overlap. The eight-lane edge pass issues its 64 row loads (80 with damping) before any
+// arithmetic and gains nothing from a prefetch (docs/PERFORMANCE.md).
 constexpr int kTriangleAhead = 64;  ///< triangle_areas: three row loads a triangle
 
 // One triangle's area vector: the loop body of triangle_areas and the whole of triangle_area,
@@ -164,6 +164,7 @@ inline void stencils8(const EdgeRecord* const edge[8], int a[8], int b[8], int l
 
 // The edge pass eight edges at a time (lanes8.h); a last block of fewer than eight repeats the
 // range's last edge in the lanes past it and stores only its own lanes.
+template <bool damped>
 void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* __restrict out,
                       int begin, int end) {
   using namespace lanes8;
@@ -185,18 +186,23 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
     }
     __m256 hinge, rest;
     stencils8(edge, a, b, l, r, hinge, rest);
-    __m256 xa, ya, za, ma, xb, yb, zb, mb, vxa, vya, vza, vxb, vyb, vzb, unused;
+    __m256 xa, ya, za, ma, xb, yb, zb, mb, unused;
     load_rows(V.xm.data(), a, xa, ya, za, ma);
     load_rows(V.xm.data(), b, xb, yb, zb, mb);
-    load_rows(V.vm.data(), a, vxa, vya, vza, unused);
-    load_rows(V.vm.data(), b, vxb, vyb, vzb, unused);
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const __m256 dx = xa - xb, dy = ya - yb, dz = za - zb;
     const __m256 lt = _mm256_sqrt_ps(dx * dx + dy * dy + dz * dz);
     const __m256 inv = _mm256_and_ps(_mm256_cmp_ps(lt, zero, _CMP_GT_OQ), one / lt);
     const __m256 msum = ma + mb;
-    const __m256 rel = -((vxb - vxa) * dx + (vyb - vya) * dy + (vzb - vza) * dz) * inv;
-    const __m256 s = (-kappa * (lt - rest) - damping * rel) * msum * inv;
+    __m256 axial = -kappa * (lt - rest);
+    if constexpr (damped) {
+      __m256 vxa, vya, vza, vxb, vyb, vzb;
+      load_rows(V.vm.data(), a, vxa, vya, vza, unused);
+      load_rows(V.vm.data(), b, vxb, vyb, vzb, unused);
+      const __m256 rel = -((vxb - vxa) * dx + (vyb - vya) * dy + (vzb - vza) * dz) * inv;
+      axial = axial - damping * rel;
+    }
+    const __m256 s = axial * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     __m256 nxa, nya, nza, nxb, nyb, nzb, nxl, nyl, nzl, nxr, nyr, nzr, xl, yl, zl, xr, yr, zr;
     load_rows(V.nr.data(), a, nxa, nya, nza, unused);
@@ -219,20 +225,26 @@ void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
 }
 #else
 // The same pass one edge at a time (a target without AVX2, or the no-SIMD build).
+template <bool damped>
 CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const Vertices& V, const StepConstants& c,
                                             EdgeOut* __restrict out, int begin, int end) {
   const float quarter = c.balanced ? 0.25f : 0.0f;
   for (int e = begin; e < end; ++e) {
     const Stencil q = stencil(E, e);
-    const Float4 pa = V.xm[q.a], pb = V.xm[q.b], va = V.vm[q.a], vb = V.vm[q.b];
+    const Float4 pa = V.xm[q.a], pb = V.xm[q.b];
     const Float4 na = V.nr[q.a], nb = V.nr[q.b], nl = V.nr[q.l], nr = V.nr[q.r], pl = V.xm[q.l], pr = V.xm[q.r];
     // Hookean spring with kappa_e = kappa (m_a + m_b) [Eq 5], damping along the axis (§2).
     const float dx = pa.x - pb.x, dy = pa.y - pb.y, dz = pa.z - pb.z;
     const float lt = std::sqrt(dx * dx + dy * dy + dz * dz);
     const float inv = lt > 0 ? 1.0f / lt : 0.0f;
     const float msum = pa.w + pb.w;
-    const float rel = -((vb.x - va.x) * dx + (vb.y - va.y) * dy + (vb.z - va.z) * dz) * inv;
-    const float s = (-c.kappa * (lt - E[e].l0) - c.damping * rel) * msum * inv;
+    float axial = -c.kappa * (lt - E[e].l0);
+    if constexpr (damped) {
+      const Float4 va = V.vm[q.a], vb = V.vm[q.b];
+      const float rel = -((vb.x - va.x) * dx + (vb.y - va.y) * dy + (vb.z - va.z) * dz) * inv;
+      axial = axial - c.damping * rel;
+    }
+    const float s = axial * msum * inv;
     // Bending [Eq 8-9]: k = s C_beta B, B = (1 - n_rl)|e|/2, the sign from the wings' normals.
     const float nrl = nr.x * nl.x + nr.y * nl.y + nr.z * nl.z;
     const float Bmag = (1.0f - nrl) * lt * 0.5f;
@@ -249,8 +261,10 @@ CRUMPLE_SCALAR_KERNEL void edge_forces_body(const Edges& E, const Vertices& V, c
 #endif
 }  // namespace
 
+// Without damping (the default) the pass reads no velocity: two of its ten rows an edge.
 void edge_forces(const Edges& E, const Vertices& V, const StepConstants& c, EdgeOut* out, int begin, int end) {
-  edge_forces_body(E, V, c, out, begin, end);
+  if (c.damping != 0.0f) edge_forces_body<true>(E, V, c, out, begin, end);
+  else edge_forces_body<false>(E, V, c, out, begin, end);
 }
 
 namespace {
