@@ -115,7 +115,7 @@ TEST(Agreement, SpringDampingOnBothBackends) {
   undamped_params.damping = 0;
   const std::unique_ptr<Simulator> undamped = sim("reference", m, undamped_params);
   Snapshot s = ls.ref->snapshot();
-  for (std::size_t k = 0; k < s.velocity.size(); ++k)  // a velocity field with no rigid part
+  for (std::size_t k = 0; k < s.velocity.size(); ++k)  // a velocity field that is no rigid motion
     s.velocity[k] = Vec3d{0.1 * std::sin(double(k)), 0.1 * std::cos(2.0 * double(k)), 0.1 * std::sin(3.0 * double(k))};
   for (Simulator* target : {ls.ref.get(), ls.fast.get(), undamped.get()}) {
     target->set_masses(s.mass);
