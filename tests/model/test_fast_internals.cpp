@@ -482,8 +482,8 @@ class EdgeLanes : public ::testing::Test {
 // its last edge: an edge's record must be the same bits whichever lane and chunk computed it,
 // and a range must write no record outside itself. Ranges split at every offset and run last
 // part first, so a block that stored its padding lanes past the end of its range would overwrite
-// the records of the part already done.
-// Both forms of the pass: with damping and without (which reads no velocity rows).
+// the records of the part already done. Both forms of the pass: with damping and without (which
+// reads no velocity rows).
 TEST_F(EdgeLanes, ARecordDoesNotDependOnItsChunkAndNoRangeWritesPastItsEnd) {
   const int n = m.E.size();
   fast::EdgeOut* out = step.edge_out.data();
